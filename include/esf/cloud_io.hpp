@@ -1,0 +1,44 @@
+#pragma once
+// Reading and writing point clouds: PCD (ascii, binary, binary_compressed; any field layout),
+// PLY point clouds (ascii, binary little and big endian) and plain "x y z" text.
+//
+// Readers take a path or any std::istream (so tests run in memory); every failure throws
+// esf::IoError with a message naming the file (and line or element where known). Only x, y, z
+// (and an optional integer `label` field) are read; the organised layout width x height is kept.
+// Non-finite points are kept as they are: drop them with drop_non_finite() before describing.
+
+#include <iosfwd>
+#include <string>
+
+#include "esf/point_cloud.hpp"
+
+namespace esf {
+
+enum class CloudFormat { kPcd, kPly, kXyz };
+
+/// Format from the file extension (.pcd, .ply, .xyz / .txt / .pts); throws IoError otherwise.
+CloudFormat cloud_format_from_path(const std::string& path);
+
+/// Reads a cloud, choosing the format from the extension.
+PointCloud read_cloud(const std::string& path);
+
+PointCloud read_pcd(const std::string& path);
+PointCloud read_pcd(std::istream& in, const std::string& name);
+
+PointCloud read_ply_cloud(const std::string& path);
+PointCloud read_ply_cloud(std::istream& in, const std::string& name);
+
+/// Whitespace- or comma-separated "x y z [more columns]" per line; '#' starts a comment.
+PointCloud read_xyz(const std::string& path);
+PointCloud read_xyz(std::istream& in, const std::string& name);
+
+enum class PcdEncoding { kAscii, kBinary, kBinaryCompressed };
+
+/// Writes x y z (and `label` when the cloud has labels), keeping width x height. The file is
+/// written to a temporary name beside the target and renamed, so a failure leaves no partial file.
+void write_pcd(const std::string& path, const PointCloud& cloud,
+               PcdEncoding encoding = PcdEncoding::kBinary);
+void write_pcd(std::ostream& out, const PointCloud& cloud,
+               PcdEncoding encoding = PcdEncoding::kBinary);
+
+}  // namespace esf

@@ -1,0 +1,68 @@
+#pragma once
+// Internal: the voxel grid and the 3-D Bresenham line tracer of the ESF descriptor.
+//
+// The grid is a 64^3 bit array (32 KiB, cache resident): cell (x, y, z) is bit
+// x | y << 6 | z << 12. A line is traced from its start cell towards its end cell exactly as
+// pcl::ESFEstimation::lci does: max(L, 1) cells are visited, L = the largest axis difference,
+// the start cell is counted and the end cell is not.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace esf::detail {
+
+inline constexpr int kGridBits = 6;
+inline constexpr int kGridSide = 1 << kGridBits;  // 64
+inline constexpr int kGridWords = kGridSide * kGridSide * kGridSide / 64;
+
+/// Cell index x | y << 6 | z << 12 of cell (x, y, z), each in [0, 63].
+constexpr std::uint32_t pack_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+    return x | (y << kGridBits) | (z << (2 * kGridBits));
+}
+
+struct alignas(64) VoxelGrid {
+    std::array<std::uint64_t, kGridWords> words{};
+
+    void clear() { words.fill(0); }
+    void set(std::uint32_t cell) { words[cell >> 6] |= std::uint64_t{1} << (cell & 63); }
+    bool occupied(std::uint32_t cell) const { return (words[cell >> 6] >> (cell & 63)) & 1; }
+    /// Marks the 26 neighbours of every set cell too (the one-cell dilation of the reference),
+    /// clipped to the first `side` cells of each axis.
+    void dilate(int side);
+};
+
+/// Number of cells a line between two cells visits: max(L, 1).
+inline std::uint32_t visited_cells(std::uint32_t start, std::uint32_t end) {
+    const auto axis = [&](int shift) {
+        const int a = static_cast<int>((start >> shift) & 63);
+        const int b = static_cast<int>((end >> shift) & 63);
+        return a > b ? a - b : b - a;
+    };
+    int length = axis(0);
+    length = axis(6) > length ? axis(6) : length;
+    length = axis(12) > length ? axis(12) : length;
+    return length > 0 ? static_cast<std::uint32_t>(length) : 1u;
+}
+
+/// Scratch buffers of trace_lines(), kept between calls to avoid allocation.
+struct TraceScratch {
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint32_t> bucket_start;
+};
+
+/// occupied[i] = occupied cells on the line starts[i] -> ends[i]. Picks the widest SIMD kernel
+/// the CPU has at run time (AVX-512, AVX2 or portable scalar); all give identical counts.
+void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
+                 std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                 TraceScratch& scratch);
+
+/// The portable kernel, exposed so that tests can compare the SIMD kernels against it.
+void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
+                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied);
+
+/// Name of the kernel trace_lines() uses on this CPU ("avx512", "avx2" or "scalar").
+const char* trace_kernel_name();
+
+}  // namespace esf::detail
