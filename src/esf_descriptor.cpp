@@ -1,6 +1,8 @@
 #include "esf/esf_descriptor.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -18,7 +20,7 @@ using detail::pack_cell;
 
 namespace {
 
-constexpr int kTopBin = kEsfBins - 1;  // 63
+constexpr int kTopBin = kEsfBins - 1;       // 63
 constexpr float kMinHeronProduct = 0.001f;  // s(s-a)(s-b)(s-c) in grid units (squared area)
 // Line and triangle classes of the reference: a line is IN when at most one of its cells is
 // empty, OUT when at most 7 are occupied; a triangle is OUT when its three lines hold at most 21
@@ -27,10 +29,13 @@ constexpr int kLineOutMaxOccupied = 7;
 constexpr int kTriangleOutMaxOccupied = 21;
 constexpr int kTriangleInMaxEmpty = 3;
 
-enum LineClass : std::uint8_t { kIn = 0, kOut = 1, kMixed = 2 };
-
-/// PCL's pcl_round(float): floor(x + 0.5f) for x >= 0 (not round(): 0.49999997f gives 1).
-inline float pcl_round(float x) { return x < 0.0f ? std::ceil(x - 0.5f) : std::floor(x + 0.5f); }
+/// PCL's pcl_round(float) for a histogram position x >= 0: floor(x + 0.5f) in float (not
+/// round(): 0.49999997f gives 1). Truncation is floor for x + 0.5f > 0, and avoids the libm call
+/// floor() is without SSE4.1.
+inline int round_bin(float x) {
+    assert(x >= 0.0f);
+    return static_cast<int>(x + 0.5f);
+}
 
 /// SplitMix64, to seed xoshiro256** from one 64-bit seed.
 inline std::uint64_t splitmix64(std::uint64_t& state) {
@@ -42,7 +47,7 @@ inline std::uint64_t splitmix64(std::uint64_t& state) {
 
 /// xoshiro256** (Blackman & Vigna): small state, fast, passes BigCrush.
 class Xoshiro256 {
-public:
+  public:
     explicit Xoshiro256(std::uint64_t seed) {
         for (auto& word : state_) word = splitmix64(seed);
     }
@@ -58,7 +63,7 @@ public:
         return result;
     }
 
-private:
+  private:
     static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
     std::uint64_t state_[4];
 };
@@ -71,7 +76,7 @@ inline std::uint32_t bounded(std::uint32_t bits, std::uint32_t n) {
 /// Angle bin of the reference, round(acos(c) / (pi/2) * 63) with PCL's float arithmetic, as a
 /// table lookup: the bin only decreases as c grows, so 63 float thresholds give it exactly.
 class AngleBins {
-public:
+  public:
     AngleBins() {
         for (int bin = 0; bin < kTopBin; ++bin) {
             // Smallest float c in [0, 1] whose bin is <= bin.
@@ -83,6 +88,7 @@ public:
             }
             threshold_[static_cast<std::size_t>(bin)] = reference(lo) <= bin ? lo : hi;
         }
+        threshold_[kTopBin] = -1.0f;  // sentinel: no bin above the last
         for (int i = 0; i <= kLut; ++i) {
             const float c = static_cast<float>(i) / kLut;
             lut_[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(count_above(c));
@@ -90,27 +96,53 @@ public:
     }
     static int reference(float c) {
         const float pih = static_cast<float>(std::numbers::pi) / 2.0f;
-        return static_cast<int>(pcl_round(std::acos(c) / pih * static_cast<float>(kTopBin)));
+        return round_bin(std::acos(c) / pih * static_cast<float>(kTopBin));
     }
     /// c = |cos| in [0, 1]; returns kEsfBins for NaN.
     int operator()(float c) const {
         if (!(c >= 0.0f && c <= 1.0f)) return kEsfBins;
-        // bin(c) = number of thresholds above c; the table gives it at the bucket's upper edge.
-        int bin = lut_[static_cast<std::size_t>(c * kLut) + 1];
-        while (bin < kTopBin && c < threshold_[static_cast<std::size_t>(bin)]) ++bin;
-        return bin;
+        // bin(c) = number of thresholds above c. The table gives it at the upper edge of c's
+        // bucket; buckets (1/4096) are narrower than the closest thresholds (6.2e-4 apart), so at
+        // most one more threshold lies between c and that edge.
+        const int bin = lut_[static_cast<std::size_t>(c * kLut) + 1];
+        return bin + static_cast<int>(c < threshold_[static_cast<std::size_t>(bin)]);
     }
 
-private:
+  private:
     int count_above(float c) const {
         int n = 0;
         while (n < kTopBin && c < threshold_[static_cast<std::size_t>(n)]) ++n;
         return n;
     }
     static constexpr int kLut = 4096;
-    std::array<float, kTopBin> threshold_{};
+    std::array<float, kEsfBins> threshold_{};
     std::array<std::uint8_t, kLut + 2> lut_{};
 };
+
+/// Ratio bin round(o / n * 63) of a MIXED line with o of n cells occupied, with the
+/// reference's float arithmetic, tabulated for every (o, n) a 64^3 grid allows.
+class RatioBins {
+  public:
+    RatioBins() {
+        for (int n = 1; n < kGridSide; ++n)
+            for (int o = 0; o <= n; ++o) {
+                const float ratio = static_cast<float>(o) / static_cast<float>(n);
+                table_[static_cast<std::size_t>(n * kGridSide + o)] =
+                    static_cast<std::uint8_t>(round_bin(ratio * static_cast<float>(kTopBin)));
+            }
+    }
+    int operator()(int occupied, int visited) const {
+        return table_[static_cast<std::size_t>(visited * kGridSide + occupied)];
+    }
+
+  private:
+    std::array<std::uint8_t, kGridSide * kGridSide> table_{};
+};
+
+const RatioBins& ratio_bin_table() {
+    static const RatioBins bins;  // immutable table, built once
+    return bins;
+}
 
 const AngleBins& angle_bins() {
     static const AngleBins bins;  // immutable table, built once
@@ -125,10 +157,12 @@ struct Triangle {
 
 /// Cell index of a scaled coordinate (reference: floor(v) + h if v < 0, else ceil(v) + h - 1),
 /// clamped to the grid (the reference reads outside it when rounding puts a point at 32.00001).
+/// |v| <= 32, so floor and ceil come from truncation.
 inline std::uint32_t cell_of(float v, int half) {
-    const float c = v < 0.0f ? std::floor(v) + static_cast<float>(half)
-                             : std::ceil(v) + static_cast<float>(half - 1);
-    return static_cast<std::uint32_t>(std::clamp(static_cast<int>(c), 0, 2 * half - 1));
+    const int truncated = static_cast<int>(v);
+    const bool fractional = static_cast<float>(truncated) != v;
+    const int c = v < 0.0f ? truncated - fractional + half : truncated + fractional + half - 1;
+    return static_cast<std::uint32_t>(std::clamp(c, 0, 2 * half - 1));
 }
 
 }  // namespace
@@ -140,14 +174,14 @@ struct EsfEstimator::Workspace {
     std::vector<Triangle> triangles;
     std::vector<std::uint32_t> line_start, line_end;
     std::vector<std::uint16_t> occupied;
-    std::vector<std::uint8_t> classes;  // 3 line classes per sample, then 1 triangle class each
+    std::vector<std::uint8_t> visited;
     detail::TraceScratch trace;
 };
 
 const std::array<const char*, kEsfBlocks>& esf_block_names() {
     static constexpr std::array<const char*, kEsfBlocks> names = {
-        "a3_in", "a3_out", "a3_mixed", "d3_in", "d3_out", "d3_mixed",
-        "d2_in", "d2_out", "d2_mixed", "d2_ratio"};
+        "a3_in",    "a3_out", "a3_mixed", "d3_in",    "d3_out",
+        "d3_mixed", "d2_in",  "d2_out",   "d2_mixed", "d2_ratio"};
     return names;
 }
 
@@ -157,9 +191,7 @@ EsfSampler parse_esf_sampler(const std::string& name) {
     throw std::invalid_argument("unknown ESF sampler '" + name + "' (expected fast or pcl)");
 }
 
-const char* to_string(EsfSampler sampler) {
-    return sampler == EsfSampler::kPcl ? "pcl" : "fast";
-}
+const char* to_string(EsfSampler sampler) { return sampler == EsfSampler::kPcl ? "pcl" : "fast"; }
 
 EsfEstimator::EsfEstimator(const EsfOptions& options)
     : options_(options), workspace_(std::make_unique<Workspace>()) {
@@ -189,7 +221,8 @@ bool normalise_fast(std::span<const Eigen::Vector3f> in, int half, Points& out) 
     for (const auto& p : in) centroid += p.cast<double>();
     centroid /= static_cast<double>(in.size());
     double radius2 = 0.0;
-    for (const auto& p : in) radius2 = std::max(radius2, (p.cast<double>() - centroid).squaredNorm());
+    for (const auto& p : in)
+        radius2 = std::max(radius2, (p.cast<double>() - centroid).squaredNorm());
     if (!(radius2 > 0.0) || !std::isfinite(radius2)) return false;
     const double scale = half / std::sqrt(radius2);
     out.resize(in.size());
@@ -208,8 +241,8 @@ bool normalise_pcl(std::span<const Eigen::Vector3f> in, Points& out) {
     float max_distance = 0.0f;
     for (std::size_t i = 0; i < in.size(); ++i) {
         for (int k = 0; k < 3; ++k) out[i][k] = in[i][k] - sum[k] / n;
-        const float d = std::sqrt(out[i].x() * out[i].x() + out[i].y() * out[i].y() +
-                                  out[i].z() * out[i].z());
+        const float d =
+            std::sqrt(out[i].x() * out[i].x() + out[i].y() * out[i].y() + out[i].z() * out[i].z());
         if (d > max_distance) max_distance = d;
     }
     if (!(max_distance > 0.0f) || !std::isfinite(max_distance)) return false;
@@ -225,9 +258,12 @@ inline float sum_sse_order(float x, float y, float z) { return (x + z) + y; }
 inline bool triangle_pcl(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
                          const Eigen::Vector3f& p3, Triangle& t) {
     const Eigen::Vector3f v21 = p2 - p1, v31 = p3 - p1, v23 = p2 - p3;
-    const float a = std::sqrt(sum_sse_order(v21.x() * v21.x(), v21.y() * v21.y(), v21.z() * v21.z()));
-    const float b = std::sqrt(sum_sse_order(v31.x() * v31.x(), v31.y() * v31.y(), v31.z() * v31.z()));
-    const float c = std::sqrt(sum_sse_order(v23.x() * v23.x(), v23.y() * v23.y(), v23.z() * v23.z()));
+    const float a =
+        std::sqrt(sum_sse_order(v21.x() * v21.x(), v21.y() * v21.y(), v21.z() * v21.z()));
+    const float b =
+        std::sqrt(sum_sse_order(v31.x() * v31.x(), v31.y() * v31.y(), v31.z() * v31.z()));
+    const float c =
+        std::sqrt(sum_sse_order(v23.x() * v23.x(), v23.y() * v23.y(), v23.z() * v23.z()));
     const float s = (a + b + c) * 0.5f;
     const float heron = s * (s - a) * (s - b) * (s - c);
     if (heron <= kMinHeronProduct) return false;
@@ -238,9 +274,9 @@ inline bool triangle_pcl(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
     const float pih = static_cast<float>(std::numbers::pi) / 2.0f;
     const float cosines[3] = {dot(n21, n31), dot(n23, n31), dot(n23, n21)};
     for (int k = 0; k < 3; ++k) {
-        const float bin = pcl_round(std::acos(std::abs(cosines[k])) / pih * static_cast<float>(kTopBin));
-        if (!(bin >= 0.0f && bin < static_cast<float>(kEsfBins))) return false;  // NaN too
-        t.angle_bin[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(bin);
+        const float x = std::acos(std::abs(cosines[k])) / pih * static_cast<float>(kTopBin);
+        if (!(x >= 0.0f && x + 0.5f < static_cast<float>(kEsfBins))) return false;  // NaN too
+        t.angle_bin[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(round_bin(x));
     }
     const auto distance = [](const Eigen::Vector3f& from, const Eigen::Vector3f& to) {
         const float dx = to.x() - from.x(), dy = to.y() - from.y(), dz = to.z() - from.z();
@@ -271,6 +307,24 @@ inline bool triangle_fast(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
     return true;
 }
 
+/// True when the points lie on one line up to float rounding: the second principal axis is
+/// shorter than 1e-5 of the first. Heron's formula in float does not reject such triples (its
+/// cancellation error exceeds the area threshold), so they are caught here.
+bool collinear(std::span<const Eigen::Vector3f> points) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : points) mean += p.cast<double>();
+    mean /= static_cast<double>(points.size());
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    for (const auto& p : points) {
+        const Eigen::Vector3d q = p.cast<double>() - mean;
+        covariance += q * q.transpose();
+    }
+    const Eigen::Vector3d eigenvalues =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
+            .eigenvalues();  // ascending
+    return eigenvalues[1] <= 1e-10 * eigenvalues[2];
+}
+
 [[noreturn]] void throw_degenerate(std::size_t points, std::size_t accepted, std::size_t attempts) {
     std::ostringstream msg;
     msg << "degenerate cloud: only " << accepted << " non-degenerate triangles in " << attempts
@@ -296,12 +350,11 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     }
     result.points = points.size();
     if (points.size() < 3)
-        throw std::invalid_argument("ESF needs at least 3 finite points, got " +
-                                    std::to_string(points.size()) +
-                                    (result.dropped_points
-                                         ? " (" + std::to_string(result.dropped_points) +
-                                               " non-finite dropped)"
-                                         : std::string()));
+        throw std::invalid_argument(
+            "ESF needs at least 3 finite points, got " + std::to_string(points.size()) +
+            (result.dropped_points
+                 ? " (" + std::to_string(result.dropped_points) + " non-finite dropped)"
+                 : std::string()));
     if (points.size() > std::numeric_limits<std::int32_t>::max())
         throw std::invalid_argument("ESF input too large: " + std::to_string(points.size()) +
                                     " points");
@@ -311,6 +364,10 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     if (!(pcl ? normalise_pcl(points, ws.scaled) : normalise_fast(points, half, ws.scaled)))
         throw std::invalid_argument("degenerate cloud: all " + std::to_string(points.size()) +
                                     " points are identical");
+
+    if (collinear(points))
+        throw std::invalid_argument("degenerate cloud: all " + std::to_string(points.size()) +
+                                    " points lie on one line");
 
     // Voxel grid with one-cell dilation (Sec. III-B).
     const std::size_t n = ws.scaled.size();
@@ -325,7 +382,8 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
 
     // Random triples (Sec. III-C): 20,000 accepted, degenerate ones redrawn.
     const auto samples = static_cast<std::size_t>(opt.samples);
-    const std::size_t max_attempts = samples * static_cast<std::size_t>(opt.max_attempts_per_sample);
+    const std::size_t max_attempts =
+        samples * static_cast<std::size_t>(opt.max_attempts_per_sample);
     ws.triangles.resize(samples);
     ws.line_start.resize(3 * samples);
     ws.line_end.resize(3 * samples);
@@ -370,60 +428,66 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
 
     // Occupancy along the three lines of every triangle (3-D Bresenham).
     ws.occupied.resize(3 * samples);
-    detail::trace_lines(ws.grid, ws.line_start, ws.line_end, ws.occupied, ws.trace);
+    ws.visited.resize(3 * samples);
+    detail::trace_lines(ws.grid, ws.line_start, ws.line_end, ws.occupied, ws.visited, ws.trace);
 
-    // Histograms, in the reference's order of operations.
-    float h[kEsfBlocks][kEsfBins] = {};
-    enum Block { kA3In, kA3Out, kA3Mixed, kD3In, kD3Out, kD3Mixed, kD2In, kD2Out, kD2Mixed, kRatio };
+    // Histograms, counted in integers: every value the reference accumulates in float is a
+    // multiple of 1/32 far below 2^24 / 32, so integer sums converted at the end are identical.
+    enum Block {
+        kA3In,
+        kA3Out,
+        kA3Mixed,
+        kD3In,
+        kD3Out,
+        kD3Mixed,
+        kD2In,
+        kD2Out,
+        kD2Mixed,
+        kRatio
+    };
+    std::uint32_t h[kEsfBlocks][kEsfBins] = {};
     float maxd2 = 0.0f, maxd3 = 0.0f;
-    std::vector<std::uint8_t>& classes = ws.classes;
-    classes.resize(4 * samples);
-    for (std::size_t t = 0; t < samples; ++t) {
-        const Triangle& tri = ws.triangles[t];
-        int occupied_sum = 0, visited_sum = 0;
-        int visited[3];
-        for (int k = 0; k < 3; ++k) {
-            const std::size_t line = 3 * t + static_cast<std::size_t>(k);
-            const int o = ws.occupied[line];
-            const int v = static_cast<int>(detail::visited_cells(ws.line_start[line], ws.line_end[line]));
-            visited[k] = v;
-            occupied_sum += o;
-            visited_sum += v;
-            LineClass cls = kMixed;
-            if (o >= v - 1) {
-                cls = kIn;
-            } else if (o <= kLineOutMaxOccupied) {
-                cls = kOut;
-            } else {
-                const float ratio = static_cast<float>(o) / static_cast<float>(v);
-                h[kRatio][static_cast<int>(pcl_round(ratio * static_cast<float>(kTopBin)))]++;
-            }
-            classes[line] = cls;
-            maxd2 = std::max(maxd2, tri.d2[static_cast<std::size_t>(k)]);
-        }
+    for (const Triangle& tri : ws.triangles) {
+        maxd2 = std::max({maxd2, tri.d2[0], tri.d2[1], tri.d2[2]});
         maxd3 = std::max(maxd3, tri.d3);
-        // A3: each angle weighted by the visited cells of the line opposite to it.
-        int block = kA3Mixed;
-        if (occupied_sum <= kTriangleOutMaxOccupied) {
-            block = kA3Out;
-        } else if (visited_sum - occupied_sum <= kTriangleInMaxEmpty) {
-            block = kA3In;
-        }
-        h[block][tri.angle_bin[0]] += static_cast<float>(visited[2]) / 32.0f;
-        h[block][tri.angle_bin[1]] += static_cast<float>(visited[0]) / 32.0f;
-        h[block][tri.angle_bin[2]] += static_cast<float>(visited[1]) / 32.0f;
-        classes[3 * samples + t] = static_cast<std::uint8_t>(block - kA3In);  // 0 in, 1 out, 2 mixed
     }
+    // The reference divides by the maximum; the fast sampler multiplies by its reciprocal (a
+    // last-bit difference at a bin border, far below the sampling noise).
+    const float d2_scale = static_cast<float>(kTopBin) / maxd2;
+    const float d3_scale = static_cast<float>(kTopBin) / maxd3;
+    const auto d2_bin = [&](float d) {
+        return std::min(round_bin(pcl ? d / maxd2 * static_cast<float>(kTopBin) : d * d2_scale),
+                        kTopBin);
+    };
+    const auto d3_bin = [&](float d) {
+        return std::min(round_bin(pcl ? d / maxd3 * static_cast<float>(kTopBin) : d * d3_scale),
+                        kTopBin);
+    };
+    const RatioBins& ratio_bins = ratio_bin_table();
     for (std::size_t t = 0; t < samples; ++t) {
         const Triangle& tri = ws.triangles[t];
-        const int d3_bin = static_cast<int>(pcl_round(tri.d3 / maxd3 * static_cast<float>(kTopBin)));
-        if (d3_bin >= 0 && d3_bin < kEsfBins) h[kD3In + classes[3 * samples + t]][d3_bin]++;
-        for (int k = 0; k < 3; ++k) {
-            const std::size_t line = 3 * t + static_cast<std::size_t>(k);
-            const int d2_bin = static_cast<int>(
-                pcl_round(tri.d2[static_cast<std::size_t>(k)] / maxd2 * static_cast<float>(kTopBin)));
-            h[kD2In + classes[line]][std::clamp(d2_bin, 0, kTopBin)]++;
+        const std::uint16_t* o = &ws.occupied[3 * t];
+        const std::uint8_t* v = &ws.visited[3 * t];
+        for (std::size_t k = 0; k < 3; ++k) {
+            // Line class: IN when at most one visited cell is empty, else OUT when at most 7 are
+            // occupied, else MIXED, which also counts its occupied share in the ratio histogram.
+            const int in = o[k] + 1 >= v[k];
+            const int out = (1 - in) & static_cast<int>(o[k] <= kLineOutMaxOccupied);
+            const int mixed = 1 - in - out;
+            h[kRatio][ratio_bins(o[k], v[k])] += static_cast<std::uint32_t>(mixed);
+            h[kD2In + out + 2 * mixed][d2_bin(tri.d2[k])]++;
         }
+        const int occupied_sum = o[0] + o[1] + o[2], visited_sum = v[0] + v[1] + v[2];
+        const int out = occupied_sum <= kTriangleOutMaxOccupied;
+        const int in =
+            (1 - out) & static_cast<int>(visited_sum - occupied_sum <= kTriangleInMaxEmpty);
+        const int cls = out + 2 * (1 - out - in);  // 0 in, 1 out, 2 mixed
+        // A3: each angle weighted by the visited cells of the line opposite to it.
+        std::uint32_t* a3 = h[kA3In + cls];
+        a3[tri.angle_bin[0]] += v[2];
+        a3[tri.angle_bin[1]] += v[0];
+        a3[tri.angle_bin[2]] += v[1];
+        h[kD3In + cls][d3_bin(tri.d3)]++;
     }
 
     // Block weights of the reference, then L1 normalisation (float, in output order).
@@ -432,7 +496,9 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     float sum = 0.0f;
     for (int b = 0; b < kEsfBlocks; ++b)
         for (int i = 0; i < kEsfBins; ++i) {
-            const float value = h[b][i] * kWeights[b];
+            const float count =
+                b <= kA3Mixed ? static_cast<float>(h[b][i]) / 32.0f : static_cast<float>(h[b][i]);
+            const float value = count * kWeights[b];
             result.descriptor[static_cast<std::size_t>(b * kEsfBins + i)] = value;
             sum += value;
         }

@@ -2,6 +2,9 @@
 
 #include <immintrin.h>
 
+// GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
 #include <algorithm>
 #include <cassert>
 #include <cstdlib>
@@ -36,163 +39,326 @@ void VoxelGrid::dilate(int side) {
 
 namespace {
 
-/// Per-line Bresenham set-up, on linear cell indices: the major axis steps every cell, each
-/// minor axis steps when its error term is positive (pcl::ESFEstimation::lci).
-struct LineSetup {
-    std::int32_t start;
-    std::int32_t major_step;  // +-1, +-64 or +-4096
-    std::int32_t minor_step[2];
-    std::int32_t error[2];      // 2 a_m - L
-    std::int32_t increment[2];  // 2 a_m
-    std::int32_t decrement;     // 2 L
-    std::int32_t visited;       // max(L, 1)
+// The reference picks a major axis and steps the two minor axes on their error terms. Giving
+// the major axis an error term too (2 L - L = L > 0, so it steps every cell and its term stays
+// L) yields the same cells with one uniform rule for all three axes and no axis selection:
+// per cell, each axis k steps when e_k > 0 (then e_k -= 2 L), and e_k += 2 a_k.
+
+struct Axes {
+    std::int32_t step[3];          // +-1, +-64, +-4096
+    std::int32_t error[3];         // 2 a_k - L
+    std::int32_t twice_length[3];  // 2 a_k
+    std::int32_t twice_major;      // 2 L
+    std::int32_t visited;          // max(L, 1)
 };
 
-inline LineSetup setup_line(std::uint32_t start, std::uint32_t end) {
-    int delta[3], length[3], step[3];
-    for (int axis = 0; axis < 3; ++axis) {
-        const int shift = axis * kGridBits;
-        delta[axis] = static_cast<int>((end >> shift) & 63) - static_cast<int>((start >> shift) & 63);
-        length[axis] = std::abs(delta[axis]);
-        step[axis] = (delta[axis] < 0 ? -1 : 1) * (1 << shift);
+inline Axes setup_line(std::uint32_t start, std::uint32_t end) {
+    Axes line{};
+    int length[3];
+    for (int k = 0; k < 3; ++k) {
+        const int shift = k * kGridBits;
+        const int delta =
+            static_cast<int>((end >> shift) & 63) - static_cast<int>((start >> shift) & 63);
+        length[k] = delta < 0 ? -delta : delta;
+        line.step[k] = (delta < 0 ? -1 : 1) * (1 << shift);
     }
-    int major, minor_a, minor_b;  // minor order as in the reference: x: y,z; y: x,z; z: y,x
-    if (length[0] >= length[1] && length[0] >= length[2]) {
-        major = 0, minor_a = 1, minor_b = 2;
-    } else if (length[1] >= length[2]) {
-        major = 1, minor_a = 0, minor_b = 2;
-    } else {
-        major = 2, minor_a = 1, minor_b = 0;
+    const int l = std::max({length[0], length[1], length[2]});
+    for (int k = 0; k < 3; ++k) {
+        line.error[k] = 2 * length[k] - l;
+        line.twice_length[k] = 2 * length[k];
     }
-    const int l = length[major];
-    return LineSetup{static_cast<std::int32_t>(start),
-                     step[major],
-                     {step[minor_a], step[minor_b]},
-                     {2 * length[minor_a] - l, 2 * length[minor_b] - l},
-                     {2 * length[minor_a], 2 * length[minor_b]},
-                     2 * l,
-                     l > 0 ? l : 1};
+    line.twice_major = 2 * l;
+    line.visited = l > 0 ? l : 1;
+    return line;
 }
 
-inline std::uint16_t trace_one(const VoxelGrid& grid, const LineSetup& line) {
-    std::int32_t cell = line.start;
-    std::int32_t e0 = line.error[0], e1 = line.error[1];
+inline std::uint16_t trace_one(const VoxelGrid& grid, std::uint32_t start, const Axes& line) {
+    std::uint32_t cell = start;
+    std::int32_t e[3] = {line.error[0], line.error[1], line.error[2]};
     std::uint32_t occupied = 0;
     for (std::int32_t i = 0; i < line.visited; ++i) {
-        occupied += grid.occupied(static_cast<std::uint32_t>(cell));
-        const bool s0 = e0 > 0, s1 = e1 > 0;
-        cell += line.major_step + (s0 ? line.minor_step[0] : 0) + (s1 ? line.minor_step[1] : 0);
-        e0 += line.increment[0] - (s0 ? line.decrement : 0);
-        e1 += line.increment[1] - (s1 ? line.decrement : 0);
+        occupied += grid.occupied(cell);
+        for (int k = 0; k < 3; ++k) {
+            const std::int32_t stepping = -static_cast<std::int32_t>(e[k] > 0);  // all ones or 0
+            cell += static_cast<std::uint32_t>(line.step[k] & stepping);
+            e[k] += line.twice_length[k] - (line.twice_major & stepping);
+        }
     }
     return static_cast<std::uint16_t>(occupied);
 }
 
-/// Orders lines by visited count so that SIMD lanes of one group run equally long.
-void sort_by_length(std::span<const std::uint32_t> starts, std::span<const std::uint32_t> ends,
-                    TraceScratch& scratch) {
-    const std::size_t count = starts.size();
-    scratch.bucket_start.assign(kGridSide + 1, 0);
-    scratch.order.resize(count);
-    auto& bucket = scratch.bucket_start;
-    std::vector<std::uint8_t> lengths(count);  // small; kept local for clarity
-    for (std::size_t i = 0; i < count; ++i) {
-        lengths[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
-        ++bucket[lengths[i]];
-    }
+/// Orders lines by visited count, so that the SIMD lanes of one group run equally long.
+void sort_by_length(std::span<const std::uint8_t> visited, TraceScratch& scratch) {
+    std::array<std::uint32_t, kGridSide + 1> bucket{};
+    for (const std::uint8_t v : visited) ++bucket[v];
     std::uint32_t sum = 0;
     for (auto& b : bucket) {
         const std::uint32_t c = b;
         b = sum;
         sum += c;
     }
-    for (std::size_t i = 0; i < count; ++i)
-        scratch.order[bucket[lengths[i]]++] = static_cast<std::uint32_t>(i);
+    scratch.order.resize(visited.size());
+    for (std::size_t i = 0; i < visited.size(); ++i)
+        scratch.order[bucket[visited[i]]++] = static_cast<std::uint32_t>(i);
 }
 
-__attribute__((target("avx2"))) void trace_lines_avx2(const VoxelGrid& grid,
-                                                      std::span<const std::uint32_t> starts,
-                                                      std::span<const std::uint32_t> ends,
-                                                      std::span<std::uint16_t> occupied,
-                                                      TraceScratch& scratch) {
-    sort_by_length(starts, ends, scratch);
-    const auto* words32 = reinterpret_cast<const int*>(grid.words.data());
+void visited_scalar(std::span<const std::uint32_t> starts, std::span<const std::uint32_t> ends,
+                    std::span<std::uint8_t> visited) {
+    for (std::size_t i = 0; i < starts.size(); ++i)
+        visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
+}
+
+#define ESF_TARGET_AVX512 __attribute__((target("avx512f,avx512bw,avx512vl,avx2,bmi2")))
+#define ESF_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
+
+ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
+                                      std::span<const std::uint32_t> ends,
+                                      std::span<std::uint8_t> visited) {
+    const __m512i m63 = _mm512_set1_epi32(63), one = _mm512_set1_epi32(1);
     const std::size_t count = starts.size();
-    const __m256i one = _mm256_set1_epi32(1), low5 = _mm256_set1_epi32(31);
-    alignas(32) std::int32_t lane[9][8];
-    for (std::size_t group = 0; group < count; group += 8) {
-        const std::size_t lanes = std::min<std::size_t>(8, count - group);
-        std::int32_t steps = 0;
-        for (std::size_t k = 0; k < 8; ++k) {
-            LineSetup s{};  // padding lanes visit nothing
-            if (k < lanes) {
-                const std::uint32_t id = scratch.order[group + k];
-                s = setup_line(starts[id], ends[id]);
+    std::size_t i = 0;
+    for (; i + 16 <= count; i += 16) {
+        const __m512i s = _mm512_loadu_si512(starts.data() + i);
+        const __m512i t = _mm512_loadu_si512(ends.data() + i);
+        __m512i longest = one;
+        for (unsigned shift = 0; shift < 18; shift += 6) {
+            const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
+                                               _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
+            longest = _mm512_max_epi32(longest, _mm512_abs_epi32(d));
+        }
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(visited.data() + i),
+                         _mm512_cvtepi32_epi8(longest));
+    }
+    for (; i < count; ++i)
+        visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
+}
+
+// The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
+// one line per lane, with the reference's major-axis form (two minor error terms). Lines are
+// sorted by length, so a group runs min(n) cells without masks and only its few longer lanes
+// run on with an activity mask. Gathers are never masked (slow on some CPUs): lanes past their
+// end wrap their cell index into the grid and their bit is dropped.
+
+ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
+                                          std::span<const std::uint32_t> starts,
+                                          std::span<const std::uint32_t> ends,
+                                          std::span<std::uint16_t> occupied,
+                                          std::span<std::uint8_t> visited, TraceScratch& scratch) {
+    visited_avx512(starts, ends, visited);
+    sort_by_length(visited, scratch);
+    const auto* words32 = reinterpret_cast<const int*>(grid.words.data());
+    const auto* start32 = reinterpret_cast<const int*>(starts.data());
+    const auto* end32 = reinterpret_cast<const int*>(ends.data());
+    const std::size_t count = starts.size();
+    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
+    const __m512i m63 = _mm512_set1_epi32(63), m31 = _mm512_set1_epi32(31);
+    const __m512i all_cells = _mm512_set1_epi32(kGridSide * kGridSide * kGridSide - 1);
+    for (std::size_t group = 0; group < count; group += 16) {
+        const std::size_t lanes = std::min<std::size_t>(16, count - group);
+        const __mmask16 live = static_cast<__mmask16>((1u << lanes) - 1u);
+        const __m512i ids = _mm512_maskz_loadu_epi32(live, scratch.order.data() + group);
+        const __m512i s = _mm512_mask_i32gather_epi32(zero, live, ids, start32, 4);
+        const __m512i t = _mm512_mask_i32gather_epi32(zero, live, ids, end32, 4);
+        __m512i length[3], step[3];
+        for (int k = 0; k < 3; ++k) {
+            const unsigned shift = static_cast<unsigned>(k * kGridBits);
+            const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
+                                               _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
+            length[k] = _mm512_abs_epi32(d);
+            const __m512i unit = _mm512_set1_epi32(1 << shift);
+            step[k] = _mm512_mask_sub_epi32(unit, _mm512_cmplt_epi32_mask(d, zero), zero, unit);
+        }
+        const __mmask16 x_major = _mm512_cmpge_epi32_mask(length[0], length[1]) &
+                                  _mm512_cmpge_epi32_mask(length[0], length[2]);
+        const __mmask16 y_major =
+            static_cast<__mmask16>(~x_major & _mm512_cmpge_epi32_mask(length[1], length[2]));
+        const __mmask16 z_major = static_cast<__mmask16>(~(x_major | y_major));
+        const __m512i major_length =
+            _mm512_max_epi32(_mm512_max_epi32(length[0], length[1]), length[2]);
+        const __m512i major_step = _mm512_mask_blend_epi32(
+            x_major, _mm512_mask_blend_epi32(y_major, step[2], step[1]), step[0]);
+        // Minor axes: x-major (y, z), y-major (x, z), z-major (x, y).
+        const __m512i len1 = _mm512_mask_blend_epi32(x_major, length[0], length[1]);
+        const __m512i step1 = _mm512_mask_blend_epi32(x_major, step[0], step[1]);
+        const __m512i len2 = _mm512_mask_blend_epi32(z_major, length[2], length[1]);
+        const __m512i step2 = _mm512_mask_blend_epi32(z_major, step[2], step[1]);
+        const __m512i inc1 = _mm512_add_epi32(len1, len1), inc2 = _mm512_add_epi32(len2, len2);
+        __m512i e1 = _mm512_sub_epi32(inc1, major_length),
+                e2 = _mm512_sub_epi32(inc2, major_length);
+        const __m512i dec = _mm512_add_epi32(major_length, major_length);
+        const int shortest = visited[scratch.order[group]];
+        const int longest = visited[scratch.order[group + lanes - 1]];
+        __m512i cell = s, in = zero;
+#define ESF_ADVANCE()                                                            \
+    do {                                                                         \
+        cell = _mm512_add_epi32(cell, major_step);                               \
+        const __mmask16 step_1 = _mm512_cmpgt_epi32_mask(e1, zero);              \
+        const __mmask16 step_2 = _mm512_cmpgt_epi32_mask(e2, zero);              \
+        cell = _mm512_mask_add_epi32(cell, step_1, cell, step1);                 \
+        cell = _mm512_mask_add_epi32(cell, step_2, cell, step2);                 \
+        e1 = _mm512_add_epi32(_mm512_mask_sub_epi32(e1, step_1, e1, dec), inc1); \
+        e2 = _mm512_add_epi32(_mm512_mask_sub_epi32(e2, step_2, e2, dec), inc2); \
+    } while (0)
+        int i = 0;
+        for (; i < shortest; ++i) {
+            const __m512i word = _mm512_i32gather_epi32(_mm512_srli_epi32(cell, 5), words32, 4);
+            in = _mm512_add_epi32(
+                in, _mm512_and_si512(_mm512_srlv_epi32(word, _mm512_and_si512(cell, m31)), one));
+            ESF_ADVANCE();
+        }
+        if (i < longest) {
+            const __m512i n = _mm512_max_epi32(major_length, one);
+            for (; i < longest; ++i) {
+                const __mmask16 active = _mm512_cmpgt_epi32_mask(n, _mm512_set1_epi32(i));
+                const __m512i word = _mm512_i32gather_epi32(
+                    _mm512_srli_epi32(_mm512_and_si512(cell, all_cells), 5), words32, 4);
+                in = _mm512_mask_add_epi32(
+                    in, active, in,
+                    _mm512_and_si512(_mm512_srlv_epi32(word, _mm512_and_si512(cell, m31)), one));
+                ESF_ADVANCE();
             }
-            lane[0][k] = s.start, lane[1][k] = s.major_step;
-            lane[2][k] = s.minor_step[0], lane[3][k] = s.minor_step[1];
-            lane[4][k] = s.error[0], lane[5][k] = s.error[1];
-            lane[6][k] = s.increment[0], lane[7][k] = s.increment[1];
-            lane[8][k] = s.visited;
-            steps = std::max(steps, s.visited);
         }
-#define ESF_LANES(row) _mm256_load_si256(reinterpret_cast<const __m256i*>(lane[row]))
-        __m256i cell = ESF_LANES(0), e0 = ESF_LANES(4), e1 = ESF_LANES(5);
-        __m256i remaining = ESF_LANES(8);
-        const __m256i major = ESF_LANES(1), step0 = ESF_LANES(2), step1 = ESF_LANES(3);
-        const __m256i inc0 = ESF_LANES(6), inc1 = ESF_LANES(7);
-#undef ESF_LANES
-        // 2 L per lane: e0 = 2 a0 - L and inc0 = 2 a0, so L = inc0 - e0.
-        const __m256i decrement = _mm256_slli_epi32(_mm256_sub_epi32(inc0, e0), 1);
-        __m256i count_in = _mm256_setzero_si256();
-        for (std::int32_t i = 0; i < steps; ++i) {
-            const __m256i active = _mm256_cmpgt_epi32(remaining, _mm256_setzero_si256());
-            const __m256i word =
-                _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), words32,
-                                            _mm256_srli_epi32(cell, 5), active, 4);
-            const __m256i bit = _mm256_and_si256(_mm256_srlv_epi32(word, _mm256_and_si256(cell, low5)), one);
-            count_in = _mm256_add_epi32(count_in, _mm256_and_si256(bit, active));
-            remaining = _mm256_sub_epi32(remaining, one);
-            const __m256i s0 = _mm256_cmpgt_epi32(e0, _mm256_setzero_si256());
-            const __m256i s1 = _mm256_cmpgt_epi32(e1, _mm256_setzero_si256());
-            cell = _mm256_add_epi32(cell, major);
-            cell = _mm256_add_epi32(cell, _mm256_and_si256(s0, step0));
-            cell = _mm256_add_epi32(cell, _mm256_and_si256(s1, step1));
-            e0 = _mm256_add_epi32(e0, _mm256_sub_epi32(inc0, _mm256_and_si256(s0, decrement)));
-            e1 = _mm256_add_epi32(e1, _mm256_sub_epi32(inc1, _mm256_and_si256(s1, decrement)));
-        }
-        alignas(32) std::int32_t result[8];
-        _mm256_store_si256(reinterpret_cast<__m256i*>(result), count_in);
+#undef ESF_ADVANCE
+        alignas(64) std::uint32_t result[16];
+        _mm512_store_si512(result, in);
         for (std::size_t k = 0; k < lanes; ++k)
             occupied[scratch.order[group + k]] = static_cast<std::uint16_t>(result[k]);
     }
 }
 
-bool has_avx2() {
+ESF_TARGET_AVX2 void trace_lines_avx2(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
+                                      std::span<const std::uint32_t> ends,
+                                      std::span<std::uint16_t> occupied,
+                                      std::span<std::uint8_t> visited, TraceScratch& scratch) {
+    visited_scalar(starts, ends, visited);
+    sort_by_length(visited, scratch);
+    const auto* words32 = reinterpret_cast<const int*>(grid.words.data());
+    const std::size_t count = starts.size();
+    const __m256i zero = _mm256_setzero_si256(), one = _mm256_set1_epi32(1);
+    const __m256i m63 = _mm256_set1_epi32(63), m31 = _mm256_set1_epi32(31);
+    const __m256i all_cells = _mm256_set1_epi32(kGridSide * kGridSide * kGridSide - 1);
+    alignas(32) std::int32_t lane_start[8], lane_end[8];
+    for (std::size_t group = 0; group < count; group += 8) {
+        const std::size_t lanes = std::min<std::size_t>(8, count - group);
+        for (std::size_t k = 0; k < 8; ++k) {  // padding lanes repeat the last line
+            const std::uint32_t id = scratch.order[group + std::min(k, lanes - 1)];
+            lane_start[k] = static_cast<std::int32_t>(starts[id]);
+            lane_end[k] = static_cast<std::int32_t>(ends[id]);
+        }
+        const __m256i s = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_start));
+        const __m256i t = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_end));
+        __m256i length[3], step[3];
+        for (int k = 0; k < 3; ++k) {
+            const int shift = k * kGridBits;
+            const __m256i d = _mm256_sub_epi32(_mm256_and_si256(_mm256_srli_epi32(t, shift), m63),
+                                               _mm256_and_si256(_mm256_srli_epi32(s, shift), m63));
+            length[k] = _mm256_abs_epi32(d);
+            step[k] = _mm256_sign_epi32(_mm256_set1_epi32(1 << shift), _mm256_or_si256(d, one));
+        }
+        // Masks are all-ones lanes; "a >= b" is "not (b > a)".
+        const __m256i x_major =
+            _mm256_andnot_si256(_mm256_or_si256(_mm256_cmpgt_epi32(length[1], length[0]),
+                                                _mm256_cmpgt_epi32(length[2], length[0])),
+                                _mm256_set1_epi32(-1));
+        const __m256i y_major =
+            _mm256_andnot_si256(_mm256_or_si256(x_major, _mm256_cmpgt_epi32(length[2], length[1])),
+                                _mm256_set1_epi32(-1));
+        const __m256i z_major =
+            _mm256_andnot_si256(_mm256_or_si256(x_major, y_major), _mm256_set1_epi32(-1));
+        const __m256i major_length =
+            _mm256_max_epi32(_mm256_max_epi32(length[0], length[1]), length[2]);
+        const __m256i major_step =
+            _mm256_blendv_epi8(_mm256_blendv_epi8(step[2], step[1], y_major), step[0], x_major);
+        const __m256i len1 = _mm256_blendv_epi8(length[0], length[1], x_major);
+        const __m256i step1 = _mm256_blendv_epi8(step[0], step[1], x_major);
+        const __m256i len2 = _mm256_blendv_epi8(length[2], length[1], z_major);
+        const __m256i step2 = _mm256_blendv_epi8(step[2], step[1], z_major);
+        const __m256i inc1 = _mm256_add_epi32(len1, len1), inc2 = _mm256_add_epi32(len2, len2);
+        __m256i e1 = _mm256_sub_epi32(inc1, major_length),
+                e2 = _mm256_sub_epi32(inc2, major_length);
+        const __m256i dec = _mm256_add_epi32(major_length, major_length);
+        const __m256i n = _mm256_max_epi32(major_length, one);
+        const int longest = visited[scratch.order[group + lanes - 1]];
+        const int shortest = visited[scratch.order[group]];
+        __m256i cell = s, in = zero;
+        for (int i = 0; i < longest; ++i) {
+            const __m256i word = _mm256_i32gather_epi32(
+                words32, _mm256_srli_epi32(_mm256_and_si256(cell, all_cells), 5), 4);
+            __m256i bit =
+                _mm256_and_si256(_mm256_srlv_epi32(word, _mm256_and_si256(cell, m31)), one);
+            if (i >= shortest)
+                bit = _mm256_and_si256(bit, _mm256_cmpgt_epi32(n, _mm256_set1_epi32(i)));
+            in = _mm256_add_epi32(in, bit);
+            const __m256i step_1 = _mm256_cmpgt_epi32(e1, zero);
+            const __m256i step_2 = _mm256_cmpgt_epi32(e2, zero);
+            cell = _mm256_add_epi32(
+                _mm256_add_epi32(cell, major_step),
+                _mm256_add_epi32(_mm256_and_si256(step_1, step1), _mm256_and_si256(step_2, step2)));
+            e1 = _mm256_add_epi32(e1, _mm256_sub_epi32(inc1, _mm256_and_si256(step_1, dec)));
+            e2 = _mm256_add_epi32(e2, _mm256_sub_epi32(inc2, _mm256_and_si256(step_2, dec)));
+        }
+        alignas(32) std::int32_t result[8];
+        _mm256_store_si256(reinterpret_cast<__m256i*>(result), in);
+        for (std::size_t k = 0; k < lanes; ++k)
+            occupied[scratch.order[group + k]] = static_cast<std::uint16_t>(result[k]);
+    }
+}
+
+enum class Kernel { kScalar, kAvx2, kAvx512 };
+
+Kernel best_kernel() {
     __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2");
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("bmi2"))
+        return Kernel::kAvx512;
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2")) return Kernel::kAvx2;
+    return Kernel::kScalar;
 }
 
 }  // namespace
 
 void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
-                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied) {
+                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                        std::span<std::uint8_t> visited) {
     assert(starts.size() == ends.size() && occupied.size() == starts.size());
-    for (std::size_t i = 0; i < starts.size(); ++i)
-        occupied[i] = trace_one(grid, setup_line(starts[i], ends[i]));
+    for (std::size_t i = 0; i < starts.size(); ++i) {
+        const Axes line = setup_line(starts[i], ends[i]);
+        occupied[i] = trace_one(grid, starts[i], line);
+        visited[i] = static_cast<std::uint8_t>(line.visited);
+    }
 }
 
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                  std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
-                 TraceScratch& scratch) {
-    static const bool avx2 = has_avx2();
-    if (avx2) {
-        trace_lines_avx2(grid, starts, ends, occupied, scratch);
-    } else {
-        trace_lines_scalar(grid, starts, ends, occupied);
+                 std::span<std::uint8_t> visited, TraceScratch& scratch, TraceKernel kernel) {
+    assert(starts.size() == ends.size() && occupied.size() == starts.size() &&
+           visited.size() == starts.size());
+    static const Kernel best = best_kernel();  // CPU features do not change while running
+    Kernel use = best;
+    if (kernel == TraceKernel::kScalar) use = Kernel::kScalar;
+    if (kernel == TraceKernel::kAvx2 && best != Kernel::kScalar) use = Kernel::kAvx2;
+    switch (use) {
+        case Kernel::kAvx512:
+            trace_lines_avx512(grid, starts, ends, occupied, visited, scratch);
+            break;
+        case Kernel::kAvx2:
+            trace_lines_avx2(grid, starts, ends, occupied, visited, scratch);
+            break;
+        case Kernel::kScalar:
+            trace_lines_scalar(grid, starts, ends, occupied, visited);
+            break;
     }
 }
 
-const char* trace_kernel_name() { return has_avx2() ? "avx2" : "scalar"; }
+const char* trace_kernel_name() {
+    switch (best_kernel()) {
+        case Kernel::kAvx512:
+            return "avx512";
+        case Kernel::kAvx2:
+            return "avx2";
+        default:
+            return "scalar";
+    }
+}
 
 }  // namespace esf::detail

@@ -49,20 +49,25 @@ inline std::uint32_t visited_cells(std::uint32_t start, std::uint32_t end) {
 /// Scratch buffers of trace_lines(), kept between calls to avoid allocation.
 struct TraceScratch {
     std::vector<std::uint32_t> order;
-    std::vector<std::uint32_t> bucket_start;
 };
 
-/// occupied[i] = occupied cells on the line starts[i] -> ends[i]. Picks the widest SIMD kernel
-/// the CPU has at run time (AVX-512, AVX2 or portable scalar); all give identical counts.
+/// Which kernel trace_lines() runs: the widest the CPU has (default), or a narrower one (tests).
+enum class TraceKernel { kBest, kAvx2, kScalar };
+
+/// For every line i (starts[i] -> ends[i]): occupied[i] = occupied cells on it, visited[i] =
+/// cells visited. Picks the widest SIMD kernel the CPU has at run time (AVX-512, AVX2 or
+/// portable scalar) unless told otherwise; all kernels give identical counts.
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                  std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
-                 TraceScratch& scratch);
+                 std::span<std::uint8_t> visited, TraceScratch& scratch,
+                 TraceKernel kernel = TraceKernel::kBest);
 
-/// The portable kernel, exposed so that tests can compare the SIMD kernels against it.
+/// The portable kernel.
 void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
-                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied);
+                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                        std::span<std::uint8_t> visited);
 
-/// Name of the kernel trace_lines() uses on this CPU ("avx512", "avx2" or "scalar").
+/// Name of the widest kernel this CPU runs ("avx512", "avx2" or "scalar").
 const char* trace_kernel_name();
 
 }  // namespace esf::detail

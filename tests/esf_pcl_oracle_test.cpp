@@ -28,9 +28,12 @@ extern "C" time_t time(time_t* out) {
 namespace {
 
 const std::vector<std::string> kClouds = {
-    "real/pcl/milk_test.pcd",          "real/objects/pcl_milkscene_o2.pcd",
-    "real/objects/pcl_milkscene_o3.pcd", "real/objects/pcl_mugscene_o1.pcd",
-    "real/objects/mosd_learn0_o2.pcd", "real/objects/mosd_learn12_o3.pcd",
+    "real/pcl/milk_test.pcd",
+    "real/objects/pcl_milkscene_o2.pcd",
+    "real/objects/pcl_milkscene_o3.pcd",
+    "real/objects/pcl_mugscene_o1.pcd",
+    "real/objects/mosd_learn0_o2.pcd",
+    "real/objects/mosd_learn12_o3.pcd",
 };
 
 esf::Points load_finite(const std::string& relative) {
@@ -71,7 +74,8 @@ TEST(EsfPclOracle, PclSamplerIsBitExact) {
         const esf::Points points = load_finite(file);
         for (time_t seed : {12345, 1, 987654321}) {
             const auto expected = pcl_esf(points, seed);
-            const auto actual = ours(points, static_cast<std::uint64_t>(seed), esf::EsfSampler::kPcl);
+            const auto actual =
+                ours(points, static_cast<std::uint64_t>(seed), esf::EsfSampler::kPcl);
             int differing = 0;
             for (int i = 0; i < esf::kEsfSize; ++i) differing += expected[i] != actual[i];
             EXPECT_EQ(differing, 0) << file << " seed " << seed;

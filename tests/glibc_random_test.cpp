@@ -11,7 +11,8 @@ TEST(GlibcRandom, MatchesGlibcRandForSeveralSeeds) {
     for (unsigned seed : {0u, 1u, 42u, 12345u, 4000000000u}) {
         std::srand(seed);
         esf::GlibcRandom model(seed);
-        for (int i = 0; i < 20000; ++i) ASSERT_EQ(model(), std::rand()) << "seed " << seed << " draw " << i;
+        for (int i = 0; i < 20000; ++i)
+            ASSERT_EQ(model(), std::rand()) << "seed " << seed << " draw " << i;
     }
 }
 

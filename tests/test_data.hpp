@@ -14,14 +14,16 @@ inline std::filesystem::path data_dir() {
     return ESF_DATA_DEFAULT;
 }
 
-inline std::filesystem::path data_file(const std::string& relative) { return data_dir() / relative; }
+inline std::filesystem::path data_file(const std::string& relative) {
+    return data_dir() / relative;
+}
 
 }  // namespace esf::test
 
 /// Skips the test, saying where the data was looked for, when a shared data file is missing.
-#define ESF_REQUIRE_DATA(relative)                                                        \
-    do {                                                                                  \
-        if (!std::filesystem::exists(::esf::test::data_file(relative)))                   \
-            GTEST_SKIP() << "shared data missing: " << ::esf::test::data_file(relative)   \
-                         << " (set ESF_DATA to the folder holding meshes/ and real/)";     \
+#define ESF_REQUIRE_DATA(relative)                                                      \
+    do {                                                                                \
+        if (!std::filesystem::exists(::esf::test::data_file(relative)))                 \
+            GTEST_SKIP() << "shared data missing: " << ::esf::test::data_file(relative) \
+                         << " (set ESF_DATA to the folder holding meshes/ and real/)";  \
     } while (0)

@@ -11,7 +11,7 @@ namespace esf {
 
 /// A file could not be read or written; what() reads "path[:line]: reason".
 class IoError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 

@@ -48,8 +48,8 @@ EsfSampler parse_esf_sampler(const std::string& name);
 const char* to_string(EsfSampler sampler);
 
 struct EsfOptions {
-    int samples = 20000;   ///< accepted point triples (paper: 20,000)
-    int grid_size = 64;    ///< voxel grid side, 8..64 (the `pcl` sampler needs 64)
+    int samples = 20000;  ///< accepted point triples (paper: 20,000)
+    int grid_size = 64;   ///< voxel grid side, 8..64 (the `pcl` sampler needs 64)
     std::uint64_t seed = 0;
     EsfSampler sampler = EsfSampler::kFast;
     /// Attempts allowed per requested sample before the cloud is declared degenerate
@@ -69,7 +69,7 @@ struct EsfResult {
 /// for clouds that have no descriptor: fewer than 3 finite points, all points identical, all on
 /// one line (no non-degenerate triangle within the attempt budget), coordinates too large.
 class EsfEstimator {
-public:
+  public:
     explicit EsfEstimator(const EsfOptions& options = {});
     ~EsfEstimator();
     EsfEstimator(EsfEstimator&&) noexcept;
@@ -78,7 +78,7 @@ public:
     EsfResult compute(std::span<const Eigen::Vector3f> points);
     const EsfOptions& options() const { return options_; }
 
-private:
+  private:
     struct Workspace;
     EsfOptions options_;
     std::unique_ptr<Workspace> workspace_;

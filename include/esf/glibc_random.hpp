@@ -9,7 +9,7 @@
 namespace esf {
 
 class GlibcRandom {
-public:
+  public:
     /// Same sequence as glibc after srand(seed) (seed 0 behaves as seed 1).
     explicit GlibcRandom(std::uint32_t seed);
 
@@ -21,7 +21,7 @@ public:
         return static_cast<std::int32_t>(value >> 1);
     }
 
-private:
+  private:
     static constexpr int kDegree = 31;
     std::array<std::uint32_t, kDegree> ring_{};  // r[i-31] .. r[i-1], oldest at pos_
     int pos_ = 0;

@@ -1,0 +1,38 @@
+# Convenience targets around CMake. `make demo` and `make test` install missing Debian packages
+# first (scripts/install-deps.sh), so they work on a fresh Debian 12 machine.
+BUILD ?= build
+JOBS ?= $(shell nproc)
+WERROR ?= ON
+CMAKE_FLAGS ?=
+
+.PHONY: all deps configure build demo test bench format format-check clean
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+configure: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DESF_WERROR=$(WERROR) $(CMAKE_FLAGS) > $(BUILD).configure.log || (cat $(BUILD).configure.log; exit 1)
+
+build: configure
+	@cmake --build $(BUILD) -j $(JOBS)
+
+demo: configure
+	@cmake --build $(BUILD) -j $(JOBS) --target esf_cli
+	@$(BUILD)/apps/esf/esf demo
+
+test: build
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+bench: build
+	@$(BUILD)/bench/esf_bench_descriptor ../shared/data/real/pcl/milk_test.pcd ../shared/data/real/objects/*.pcd
+
+format:
+	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
+
+format-check:
+	@git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror
+
+clean:
+	@rm -rf $(BUILD) $(BUILD).configure.log

@@ -1,0 +1,40 @@
+#pragma once
+// Helpers shared by the esf subcommands: exit codes, errors, progress display.
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+namespace esf::cli {
+
+inline constexpr int kExitUsage = 1;
+inline constexpr int kExitRuntime = 2;
+
+/// Thrown by a command to end with an exit code after it has printed its own diagnostics
+/// (e.g. some files of a batch failed).
+struct ExitStatus {
+    int code;
+};
+
+/// True when stderr is a terminal (progress bars are drawn only then).
+bool stderr_is_terminal();
+
+/// A one-line progress bar on stderr, redrawn at most ~10 times a second; silent when stderr
+/// is not a terminal.
+class Progress {
+  public:
+    Progress(std::string label, std::size_t total);
+    ~Progress();
+    void update(std::size_t done, const std::string& detail = {});
+    void finish();
+
+  private:
+    std::string label_;
+    std::size_t total_;
+    bool enabled_;
+    double start_;
+    double last_draw_ = -1.0;
+    bool finished_ = false;
+};
+
+}  // namespace esf::cli

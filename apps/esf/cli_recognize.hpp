@@ -1,0 +1,79 @@
+#pragma once
+// Output shared by esf classify and esf scene: JSON of classifications and the recogniser's
+// command-line options.
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "esf/recognizer.hpp"
+
+namespace esf::cli {
+
+struct RecognizerArgs {
+    std::string database;
+    RecognizerOptions options;
+    bool no_weights = false;
+};
+
+/// DB positional, -k, --descriptor, --no-weights, --threads. `args` must outlive `cmd`.
+inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
+    cmd.add_option("database", args.database, "Training database (esf train ... -o DB)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd.add_option("-k", args.options.k,
+                   "Nearest views that vote (1: the class of the nearest view)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd.add_option("--descriptor", args.options.descriptor,
+                   "Descriptor kind to use when the database holds several");
+    cmd.add_flag("--no-weights", args.no_weights,
+                 "Ignore the database's learned sub-histogram weights (plain L1)");
+    cmd.add_option("--threads", args.options.threads, "Worker threads, 0 = all cores")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+}
+
+inline RecognizerOptions recognizer_options(const RecognizerArgs& args) {
+    RecognizerOptions options = args.options;
+    options.use_weights = !args.no_weights;
+    return options;
+}
+
+/// A 4x4 pose as 16 numbers, row-major.
+inline nlohmann::json pose_json(const Eigen::Matrix4f& pose) {
+    nlohmann::json out = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) out.push_back(pose(r, c));
+    return out;
+}
+
+inline nlohmann::json neighbours_json(const Classification& c) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const NeighbourView& n : c.neighbours)
+        out.push_back({{"class", n.class_name},
+                       {"model", n.model_name},
+                       {"view", n.view},
+                       {"distance", n.distance},
+                       {"pose", pose_json(n.pose)}});
+    return out;
+}
+
+/// class, confidence, model, view, distance, pose, neighbours.
+inline void add_classification_json(nlohmann::json& out, const Classification& c) {
+    out["class"] = c.class_name;
+    out["confidence"] = c.confidence;
+    out["model"] = c.best_model;
+    out["view"] = c.best_view;
+    out["distance"] = c.best_distance;
+    out["pose"] = pose_json(c.pose);
+    out["neighbours"] = neighbours_json(c);
+}
+
+/// "path: reason", without repeating the path when the reason starts with it.
+inline std::string with_file(const std::string& file, const std::string& what) {
+    return what.rfind(file, 0) == 0 ? what : file + ": " + what;
+}
+
+}  // namespace esf::cli

@@ -1,0 +1,75 @@
+#include "cli_scene.hpp"
+
+#include <filesystem>
+
+#include "esf/cloud_io.hpp"
+
+namespace esf::cli {
+
+void add_depth_png_options(CLI::App& cmd, SceneInputArgs& args) {
+    cmd.add_flag("--depth-png", args.depth_png,
+                 "Read scenes as 16-bit depth PNGs (implied by the .png extension)");
+    cmd.add_option("--fx", args.intrinsics.fx, "Depth PNG: focal length x (pixels)")
+        ->capture_default_str();
+    cmd.add_option("--fy", args.intrinsics.fy, "Depth PNG: focal length y (pixels)")
+        ->capture_default_str();
+    cmd.add_option("--cx", args.intrinsics.cx, "Depth PNG: principal point x (pixels)")
+        ->capture_default_str();
+    cmd.add_option("--cy", args.intrinsics.cy, "Depth PNG: principal point y (pixels)")
+        ->capture_default_str();
+    cmd.add_option("--depth-scale", args.depth_scale,
+                   "Depth PNG: metres per unit (0.001 = millimetres; 0.0002 for 5000 per metre)")
+        ->capture_default_str();
+}
+
+void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
+    SegmentationOptions& o = args.segmentation;
+    cmd.add_option("--plane-distance", o.plane_distance,
+                   "Max distance of a table point to the plane (m)")
+        ->capture_default_str();
+    cmd.add_option("--plane-iterations", o.plane_iterations,
+                   "Max RANSAC hypotheses (fewer when the plane is clear)")
+        ->capture_default_str();
+    cmd.add_option("--plane-samples", o.plane_samples,
+                   "Points the plane is fitted on (an even subsample)")
+        ->capture_default_str();
+    cmd.add_option("--min-plane-points", o.min_plane_points,
+                   "A plane needs at least this many points...")
+        ->capture_default_str();
+    cmd.add_option("--min-plane-fraction", o.min_plane_fraction,
+                   "...and at least this fraction of the finite points (0..1)")
+        ->capture_default_str();
+    cmd.add_option("--min-height", o.min_height, "Objects start this high above the plane (m)")
+        ->capture_default_str();
+    cmd.add_option("--max-height", o.max_height, "Objects end this high above the plane (m)")
+        ->capture_default_str();
+    cmd.add_option("--viewpoint", args.viewpoint,
+                   "Sensor position x y z in the cloud's frame (m); its side of the plane is up")
+        ->expected(3)
+        ->capture_default_str();
+    cmd.add_option("--cluster-tolerance", o.cluster_tolerance,
+                   "Largest gap between two points of one object (m)")
+        ->capture_default_str();
+    cmd.add_option("--min-cluster-points", o.min_cluster_points,
+                   "Smaller clusters are dropped (points)")
+        ->capture_default_str();
+    cmd.add_option("--max-cluster-points", o.max_cluster_points,
+                   "Larger clusters are dropped (points)")
+        ->capture_default_str();
+    cmd.add_option("--seed", o.seed, "RANSAC seed")->capture_default_str();
+}
+
+SegmentationOptions segmentation_options(const SceneInputArgs& args) {
+    SegmentationOptions options = args.segmentation;
+    options.viewpoint = {args.viewpoint[0], args.viewpoint[1], args.viewpoint[2]};
+    validate(options);
+    return options;
+}
+
+PointCloud load_scene_cloud(const std::string& path, const SceneInputArgs& args) {
+    const bool png = args.depth_png || std::filesystem::path(path).extension() == ".png";
+    if (!png) return read_cloud(path);
+    return depth_to_cloud(read_depth_png(path), args.intrinsics, args.depth_scale);
+}
+
+}  // namespace esf::cli

@@ -1,0 +1,44 @@
+// esf: recognise the category of objects seen by a depth sensor, trained only on CAD models.
+// main() wires the subcommands together and turns exceptions into one line on stderr.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "esf/error.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "esf - 3-D object classification with the Ensemble of Shape Functions descriptor\n"
+        "(Wohlkinger & Vincze, 2011). Train on CAD models, recognise objects in depth data."};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "esf 0.1.0");
+    esf::cli::add_demo_command(app);
+    esf::cli::add_describe_command(app);
+    esf::cli::add_train_command(app);
+    esf::cli::add_info_command(app);
+    esf::cli::add_segment_command(app);
+    esf::cli::add_generate_command(app);
+    esf::cli::add_render_command(app);
+    esf::cli::add_classify_command(app);
+    esf::cli::add_scene_command(app);
+    // @commands: one add_<name>_command(app) call per command above this line
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int code = app.exit(e);  // prints help, version or the usage error
+        return code == 0 ? 0 : esf::cli::kExitUsage;
+    } catch (const esf::cli::ExitStatus& status) {
+        return status.code;
+    } catch (const std::invalid_argument& e) {
+        std::fprintf(stderr, "esf: error: %s\n", e.what());
+        return esf::cli::kExitRuntime;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "esf: error: %s\n", e.what());
+        return esf::cli::kExitRuntime;
+    }
+    return 0;
+}

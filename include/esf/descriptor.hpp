@@ -1,0 +1,96 @@
+#pragma once
+// One interface through which every global descriptor is computed: ESF and the baselines the
+// evaluation compares it with (Wohlkinger & Vincze, ROBIO 2011, Sec. IV).
+//
+//   name       dim  signatures  what
+//   esf        640  1           our ESF (fast sampler, seeded)
+//   pcl-esf    640  1           pcl::ESFEstimation of PCL 1.13 (time-seeded: not reproducible)
+//   sdvs       192  1           D2 split by voxel-line class IN, OUT, MIXED (SDVS)
+//   d2          64  1           the plain D2 shape distribution (Osada et al. 2002)
+//   vfh        308  1           pcl::VFHEstimation (Rusu et al. 2010)
+//   cvfh       308  1 or more   pcl::CVFHEstimation, one per smooth region (Aldoma et al. 2011)
+//   our-cvfh   308  1 or more   pcl::OURCVFHEstimation, one per region and reference frame
+//                               (Aldoma et al. 2012)
+//   gasd       512  1           pcl::GASDEstimation, shape only (Lima & Teichrieb 2016)
+//   shot       352  1           pcl::SHOTEstimation at the centroid with a radius covering the
+//                               whole object (Tombari et al. 2010, used as a global descriptor)
+//
+// Every signature is finite, non-negative and L1-normalised to sum 1, so that L1 distances are
+// comparable across descriptors. Input points are in the sensor frame (the camera at the origin
+// looking along +z); non-finite points are dropped first.
+//
+// The PCL baselines (vfh, cvfh, our-cvfh, gasd, shot) share the preprocessing of PCL's global
+// recognition pipeline (pcl::rec_3d_framework): r = median over the points of (sum of the
+// distances to the 8 nearest neighbours) / 9, the framework's "mesh resolution"; voxel grid with
+// leaf = 3 r; points with fewer than 5 neighbours within the normal radius removed; normals by
+// pcl::NormalEstimation with radius = 3 leaves (the ratio of PCL's CVFH defaults, 5 mm leaf,
+// 15 mm radius), oriented towards the sensor; points without a normal dropped. DescriptorOptions
+// holds the factors; src/baseline_descriptors.cpp lists each baseline's parameters.
+//
+// Errors: every failure is a std::invalid_argument whose message starts with the descriptor
+// name ("vfh: ..."): fewer than 3 finite points, all points identical, all on one line, too few
+// points left after the preprocessing, or a signature that comes out non-finite.
+//
+// Thread safety: compute() is const and may run concurrently on one object from any number of
+// threads; each call builds its own PCL objects. pcl-esf serialises its calls (PCL draws from
+// the process-global rand(), reseeded from time() on every call), so it is thread-safe but
+// neither reproducible nor parallel. PCL prints its own warnings (e.g. OUR-CVFH's "Both axes
+// are equally easy/difficult to disambiguate") through pcl::console; an application silences
+// them with pcl::console::setVerbosityLevel(pcl::console::L_ERROR).
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "esf/point_cloud.hpp"
+
+namespace esf {
+
+/// What a descriptor computes.
+struct DescriptorInfo {
+    std::string name;              ///< registry name: "esf", "vfh", ...
+    int dimension = 0;             ///< floats per signature
+    bool multi_signature = false;  ///< may return several signatures per cloud (CVFH, OUR-CVFH)
+    bool deterministic = true;     ///< the same input and options give the same output
+    std::string description;       ///< one line: method and reference
+};
+
+struct DescriptorOptions {
+    /// esf, sdvs, d2: seed of the triple sampler (pcl-esf is seeded from the clock by PCL).
+    std::uint64_t seed = 0;
+    /// esf, sdvs, d2: accepted point triples (paper: 20,000; pcl-esf always uses 20,000).
+    int samples = 20000;
+    /// PCL baselines: voxel-grid leaf in units of the mesh resolution r (0: no downsampling).
+    float leaf_factor = 3.0f;
+    /// PCL baselines: normal radius (also CVFH's cluster tolerance) in units of the leaf
+    /// (in units of r when leaf_factor is 0).
+    float normal_radius_factor = 3.0f;
+    /// PCL baselines: drop points with fewer than 5 neighbours within the normal radius.
+    bool remove_outliers = true;
+};
+
+/// One descriptor vector (its length is info().dimension).
+using Signature = std::vector<float>;
+
+/// A global descriptor: a cloud in, one or more signatures out.
+class GlobalDescriptor {
+  public:
+    virtual ~GlobalDescriptor();
+    virtual const DescriptorInfo& info() const = 0;
+    /// One signature per cloud, or (CVFH, OUR-CVFH) one per smooth region / reference frame,
+    /// each finite, non-negative, of info().dimension floats summing to 1. Throws
+    /// std::invalid_argument naming the descriptor for input it cannot describe.
+    virtual std::vector<Signature> compute(std::span<const Eigen::Vector3f> points) const = 0;
+};
+
+/// Creates the descriptor `name` (one of descriptor_names()). Throws std::invalid_argument for
+/// an unknown name (the message lists the valid ones) or options out of range.
+std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
+                                                  const DescriptorOptions& options = {});
+
+/// The registered names, in the order of the table above.
+std::vector<std::string> descriptor_names();
+
+}  // namespace esf

@@ -1,0 +1,153 @@
+#pragma once
+// Training (the paper's Sec. IV): every CAD model of ROOT/<category>/<model>.<ext> is rendered
+// from the view sphere, every view is described with ESF (or, for the baseline comparison, any
+// descriptor of descriptor.hpp), and the views, descriptors and the settings used go into a
+// Database, one transaction per model.
+//
+// The rendering does not depend on the descriptor: databases of different descriptors trained
+// with the same seed and render options hold the same views (poses, point counts, sensor noise),
+// so descriptors are compared on identical data.
+//
+// Resuming: models already complete in the database are skipped, so a run that was killed
+// continues where it stopped and a root with new models only adds those. Seeds are derived from
+// (seed, category/model name, view index), so the stored data does not depend on the thread
+// count, on the order models are trained in, or on which models were trained before.
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "esf/database.hpp"
+#include "esf/descriptor.hpp"
+#include "esf/esf_descriptor.hpp"
+#include "esf/render.hpp"
+
+namespace esf {
+
+/// A mesh file found under a training root.
+struct ModelFile {
+    std::string category;  ///< the folder name
+    std::string name;      ///< the file name without extension
+    std::string file;      ///< path relative to the root, '/'-separated ("box/kit_Amicelli.obj")
+    std::string path;      ///< full path
+};
+
+/// File extensions find_models() takes as meshes (lower case; matched case-insensitively).
+const std::vector<std::string>& mesh_extensions();
+
+/// Lists ROOT/<category>/<model>.<ext> for the mesh extensions, sorted by (category, name).
+/// Hidden files and folders, files directly in ROOT and deeper folders are ignored. Throws
+/// esf::IoError when ROOT is not a folder, std::invalid_argument when two files of a category
+/// share a name (e.g. mug/a.ply and mug/a.obj).
+std::vector<ModelFile> find_models(const std::string& root);
+
+/// One row of a mesh catalog: `file,category,source,model,group,extent,metric,...` with `file`
+/// relative to the training root, `extent` the longest side of the model's oriented bounding box
+/// in file units and `metric` "yes" or "no".
+struct CatalogEntry {
+    std::string file;
+    std::string category;
+    std::string group;
+    double extent = 0.0;  ///< 0: unknown
+    bool metric = true;
+};
+
+struct Catalog {
+    std::vector<CatalogEntry> entries;
+
+    /// The entry of a file (relative path as in ModelFile::file), nullptr when absent.
+    const CatalogEntry* find(const std::string& file) const;
+};
+
+/// Reads a catalog CSV (RFC 4180 quoting; columns found by header name, `file` required).
+/// Throws esf::IoError "path:line: reason" for unreadable files and malformed rows.
+Catalog read_catalog(const std::string& path);
+
+/// The size (longest side, metres) given to a non-metric model of `category`: the median extent
+/// of the catalog's metric models of that category; for categories without any, a table of
+/// typical household object sizes (e.g. glass 0.12 m, spray 0.20 m, tube 0.17 m); otherwise
+/// kDefaultTypicalExtent.
+double typical_extent(const Catalog& catalog, const std::string& category);
+inline constexpr double kDefaultTypicalExtent = 0.15;
+
+/// Seed of a model's rendering, derived from the run's seed and "category/name".
+std::uint64_t model_seed(std::uint64_t seed, const std::string& category, const std::string& name);
+/// Seed of the descriptor of one view of a model.
+std::uint64_t view_seed(std::uint64_t model_seed, int view_index);
+
+struct TrainingProgress {
+    std::size_t models_total = 0;     ///< models found under the root
+    std::size_t models_done = 0;      ///< handled so far, including those already stored
+    std::size_t models_existing = 0;  ///< already complete in the database (not redone)
+    std::size_t models_failed = 0;
+    std::size_t views = 0;          ///< views described in this run
+    std::size_t views_skipped = 0;  ///< views skipped in this run
+    std::string model;              ///< "category/name" just finished; empty in the first call
+};
+
+struct TrainingOptions {
+    /// View sphere, camera and sensor. render.seed is ignored (see model_seed), render.threads
+    /// too (see `threads`); render.scale / target_extent apply to every model except the
+    /// non-metric ones of a catalog, which get typical_extent() of their category.
+    RenderOptions render;
+    /// The descriptor stored: "esf" (our estimator with `esf`) or any other name of
+    /// descriptor_names() (make_descriptor() with `descriptor_options`).
+    std::string descriptor = "esf";
+    EsfOptions esf;  ///< descriptor "esf"; esf.seed is ignored (see view_seed)
+    /// Any other descriptor; descriptor_options.seed is ignored (see view_seed).
+    DescriptorOptions descriptor_options;
+    std::uint64_t seed = 0;
+    /// Views with fewer points (e.g. a thin object seen edge-on) are stored as skipped.
+    std::size_t min_points = 50;
+    int threads = 0;  ///< 0 = all cores
+    /// Catalog CSV; empty: ROOT/catalog.csv when it exists. With a catalog, non-metric models are
+    /// scaled so their extent is typical_extent() of their category, and models get its group.
+    std::string catalog;
+    bool use_catalog = true;  ///< false: ignore any catalog (all models metric, group = name)
+    /// Called on the calling thread once before the first model and after every model committed.
+    /// It may throw to stop training: models committed so far stay, the exception propagates.
+    std::function<void(const TrainingProgress&)> progress;
+};
+
+struct TrainingFailure {
+    std::string model;  ///< "category/name"
+    std::string error;
+};
+
+struct TrainingResult {
+    std::size_t models_total = 0;
+    std::size_t models_trained = 0;   ///< completed in this run
+    std::size_t models_existing = 0;  ///< already complete, skipped
+    std::size_t models_failed = 0;    ///< stored as failed in this run (retried on resume)
+    std::size_t views = 0;            ///< described in this run
+    std::size_t views_skipped = 0;    ///< skipped in this run
+    std::vector<TrainingFailure> failures;
+};
+
+/// The settings train() stores with a database and compares on resume: the descriptor's name,
+/// version and dimension, its options (esf_* for "esf", descriptor_* for the others, the keys
+/// Recognizer's query_setup() reads), the seed, view sphere, camera, sensor and scaling. Throws
+/// std::invalid_argument for an unknown descriptor.
+Settings training_settings(const TrainingOptions& options, bool rescale_non_metric);
+
+/// The version train() stores for a descriptor: kEsfVersion for "esf", kBaselineDescriptorVersion
+/// for the others (what Recognizer's descriptor_version() expects).
+inline constexpr int kBaselineDescriptorVersion = 1;
+
+/// Trains every model under `root` that is not complete in `database` (opened for writing).
+/// Throws std::invalid_argument for bad options (an unknown descriptor: the message lists the
+/// valid names), for a root without meshes and when the database holds other settings (naming
+/// each difference; another descriptor first); esf::IoError for unreadable roots, catalogs or
+/// database errors. A mesh that fails to load or render is stored as failed, not thrown.
+/// Models go in batches of 2 x threads: their meshes load in parallel, all their views are
+/// rendered and described in parallel (one view per task), then they are committed in order.
+/// A view the descriptor cannot describe (too few points left after a baseline's preprocessing,
+/// a degenerate cloud) is stored as skipped with the descriptor's message, like a view with fewer
+/// than min_points points. Multi-signature descriptors (cvfh, our-cvfh) store all signatures of
+/// a view.
+TrainingResult train(const std::string& root, Database& database,
+                     const TrainingOptions& options = {});
+
+}  // namespace esf

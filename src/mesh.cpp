@@ -1,0 +1,326 @@
+#include "esf/mesh.hpp"
+
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <assimp/Importer.hpp>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "esf/error.hpp"
+
+namespace esf {
+namespace {
+
+Eigen::Matrix4d to_eigen(const aiMatrix4x4& m) {
+    Eigen::Matrix4d out;
+    out << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3,
+        m.d4;
+    return out;
+}
+
+// Appends the triangles of one mesh, its vertices mapped by `transform`.
+void append(const aiMesh& mesh, const Eigen::Matrix4d& transform, Mesh& out) {
+    const auto base = static_cast<int>(out.vertices.size());
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+        const aiVector3D& p = mesh.mVertices[v];
+        const Eigen::Vector4d q = transform * Eigen::Vector4d(p.x, p.y, p.z, 1.0);
+        out.vertices.push_back((q.head<3>() / q.w()).cast<float>());
+    }
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+        const aiFace& face = mesh.mFaces[f];
+        if (face.mNumIndices != 3) continue;  // points and lines
+        const Eigen::Vector3i t(static_cast<int>(face.mIndices[0]),
+                                static_cast<int>(face.mIndices[1]),
+                                static_cast<int>(face.mIndices[2]));
+        if (t.minCoeff() < 0 || t.maxCoeff() >= static_cast<int>(mesh.mNumVertices)) continue;
+        out.triangles.emplace_back(t.array() + base);
+    }
+}
+
+// Appends every mesh under `node`, transformed to the root frame.
+void collect(const aiScene& scene, const aiNode& node, const Eigen::Matrix4d& parent,
+             std::vector<bool>& used, Mesh& out) {
+    const Eigen::Matrix4d transform = parent * to_eigen(node.mTransformation);
+    for (unsigned k = 0; k < node.mNumMeshes; ++k) {
+        const unsigned mesh_index = node.mMeshes[k];
+        if (mesh_index >= scene.mNumMeshes || scene.mMeshes[mesh_index] == nullptr) continue;
+        used[mesh_index] = true;
+        append(*scene.mMeshes[mesh_index], transform, out);
+    }
+    for (unsigned c = 0; c < node.mNumChildren; ++c) {
+        if (node.mChildren[c] != nullptr) collect(scene, *node.mChildren[c], transform, used, out);
+    }
+}
+
+// Drops triangles with a repeated vertex index and vertices no triangle uses.
+Mesh compact(const Mesh& mesh) {
+    Mesh out;
+    std::vector<int> remap(mesh.vertices.size(), -1);
+    out.triangles.reserve(mesh.triangles.size());
+    for (const Eigen::Vector3i& t : mesh.triangles) {
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        Eigen::Vector3i r;
+        for (int k = 0; k < 3; ++k) {
+            int& index = remap[static_cast<std::size_t>(t[k])];
+            if (index < 0) {
+                index = static_cast<int>(out.vertices.size());
+                out.vertices.push_back(mesh.vertices[static_cast<std::size_t>(t[k])]);
+            }
+            r[k] = index;
+        }
+        out.triangles.push_back(r);
+    }
+    return out;
+}
+
+// Assimp 5.2 loops forever on a PLY header without `end_header` and allocates whatever the
+// header announces; check the header against the file size first.
+void check_ply_header(const std::string& path, std::uintmax_t file_size) {
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    if (!std::getline(in, line)) return;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line != "ply" && line != "PLY") return;  // not PLY: Assimp reports it
+
+    constexpr std::size_t kMaxHeader = std::size_t{1} << 20;
+    std::size_t header_bytes = line.size() + 1;
+    bool binary = false;
+    bool known_sizes = true;
+    struct Element {
+        std::string name;
+        double count = 0;
+        double min_bytes = 0;  // per element: fixed properties and list counts
+        int properties = 0;
+    };
+    std::vector<Element> elements;
+    const auto type_size = [](const std::string& type) -> int {
+        if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+        if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+        if (type == "int" || type == "uint" || type == "int32" || type == "uint32" ||
+            type == "float" || type == "float32")
+            return 4;
+        if (type == "double" || type == "float64") return 8;
+        return 0;
+    };
+    bool ended = false;
+    while (header_bytes < kMaxHeader && std::getline(in, line)) {
+        header_bytes += line.size() + 1;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream words(line);
+        std::string keyword;
+        words >> keyword;
+        if (keyword == "end_header") {
+            ended = true;
+            break;
+        }
+        if (keyword == "format") {
+            std::string format;
+            words >> format;
+            binary = format.rfind("binary", 0) == 0;
+        } else if (keyword == "element") {
+            Element e;
+            words >> e.name >> e.count;
+            if (!words || !(e.count >= 0)) known_sizes = false;
+            elements.push_back(e);
+        } else if (keyword == "property" && !elements.empty()) {
+            std::string type;
+            words >> type;
+            if (type == "list") words >> type;  // the count type; items may be none
+            const int size = type_size(type);
+            if (size == 0) known_sizes = false;
+            elements.back().min_bytes += size;
+            ++elements.back().properties;
+        }
+    }
+    if (!ended) throw IoError(file_message(path, 0, "PLY header has no end_header line"));
+    if (!known_sizes) return;
+    const double available = static_cast<double>(file_size) - static_cast<double>(header_bytes);
+    double need = 0.0;
+    for (const Element& e : elements) {
+        // ASCII needs at least one digit and a separator per property.
+        need += e.count * (binary ? e.min_bytes : 2.0 * e.properties);
+        if (need > available) {
+            std::ostringstream reason;
+            reason << "truncated PLY: the header announces " << e.count << " " << e.name
+                   << " elements, needing at least " << need
+                   << " bytes with those before them, but " << available
+                   << " bytes follow the header";
+            throw IoError(file_message(path, 0, reason.str()));
+        }
+    }
+}
+
+}  // namespace
+
+Eigen::Vector3f Mesh::min_corner() const {
+    if (vertices.empty()) throw std::invalid_argument("min_corner: mesh has no vertex");
+    Eigen::Vector3f m = vertices.front();
+    for (const auto& v : vertices) m = m.cwiseMin(v);
+    return m;
+}
+
+Eigen::Vector3f Mesh::max_corner() const {
+    if (vertices.empty()) throw std::invalid_argument("max_corner: mesh has no vertex");
+    Eigen::Vector3f m = vertices.front();
+    for (const auto& v : vertices) m = m.cwiseMax(v);
+    return m;
+}
+
+void check_mesh(const Mesh& mesh, const std::string& what) {
+    if (mesh.triangles.empty()) throw std::invalid_argument(what + ": mesh has no triangle");
+    if (mesh.vertices.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+        throw std::invalid_argument(what + ": too many vertices");
+    const int n = static_cast<int>(mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const Eigen::Vector3i& t = mesh.triangles[i];
+        if (t.minCoeff() < 0 || t.maxCoeff() >= n)
+            throw std::invalid_argument(what + ": triangle " + std::to_string(i) +
+                                        " has a vertex index outside [0, " + std::to_string(n) +
+                                        ")");
+    }
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        if (!mesh.vertices[i].allFinite())
+            throw std::invalid_argument(what + ": vertex " + std::to_string(i) + " is not finite");
+    }
+}
+
+Mesh load_mesh(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw IoError(file_message(path, 0, "no such file"));
+    if (std::filesystem::is_directory(path, ec))
+        throw IoError(file_message(path, 0, "is a directory, not a mesh file"));
+    const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
+    if (ec) throw IoError(file_message(path, 0, "cannot read: " + ec.message()));
+    if (file_size == 0) throw IoError(file_message(path, 0, "empty file"));
+    check_ply_header(path, file_size);
+
+    Assimp::Importer importer;
+    const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+    const auto fail = [&] {
+        std::string reason = importer.GetErrorString();
+        if (reason.empty()) reason = "unknown error";
+        return IoError(file_message(path, 0, "cannot read mesh: " + reason));
+    };
+    if (scene == nullptr) throw fail();
+    // Checked before post-processing: JoinIdenticalVertices merges NaN vertices with others.
+    for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+        const aiMesh* mesh = scene->mMeshes[i];
+        for (unsigned v = 0; mesh != nullptr && v < mesh->mNumVertices; ++v) {
+            const aiVector3D& p = mesh->mVertices[v];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                throw IoError(file_message(path, 0, "has a non-finite vertex"));
+        }
+    }
+    // Only positions matter: dropping normals, texture coordinates and colours first lets
+    // JoinIdenticalVertices merge the vertices that files split along seams.
+    importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS,
+                                aiComponent_NORMALS | aiComponent_TANGENTS_AND_BITANGENTS |
+                                    aiComponent_COLORS | aiComponent_TEXCOORDS |
+                                    aiComponent_BONEWEIGHTS | aiComponent_ANIMATIONS |
+                                    aiComponent_TEXTURES | aiComponent_LIGHTS |
+                                    aiComponent_CAMERAS | aiComponent_MATERIALS);
+    importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                                aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    scene = importer.ApplyPostProcessing(aiProcess_RemoveComponent | aiProcess_Triangulate |
+                                         aiProcess_SortByPType | aiProcess_JoinIdenticalVertices);
+    if (scene == nullptr) {
+        // SortByPType fails when only points and lines were there.
+        if (std::string(importer.GetErrorString()).find("No meshes remaining") != std::string::npos)
+            throw IoError(file_message(path, 0, "holds no triangle"));
+        throw fail();
+    }
+    if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mNumMeshes == 0)
+        throw IoError(file_message(path, 0, "holds no triangle"));
+
+    Mesh merged;
+    std::vector<bool> used(scene->mNumMeshes, false);
+    if (scene->mRootNode != nullptr)
+        collect(*scene, *scene->mRootNode, Eigen::Matrix4d::Identity(), used, merged);
+    // Meshes no node refers to (possible in some formats) are taken as they are.
+    for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+        if (!used[i] && scene->mMeshes[i] != nullptr)
+            append(*scene->mMeshes[i], Eigen::Matrix4d::Identity(), merged);
+    }
+
+    Mesh out = compact(merged);
+    if (out.triangles.empty()) throw IoError(file_message(path, 0, "holds no triangle"));
+    for (const auto& v : out.vertices) {
+        if (!v.allFinite())  // finite in the file, overflowed by a node transform
+            throw IoError(file_message(path, 0, "has a non-finite vertex"));
+    }
+    return out;
+}
+
+void write_ply_mesh(const std::string& path, const Mesh& mesh) {
+    check_mesh(mesh, path);
+    std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by esf\n";
+    header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
+    header += "property float x\nproperty float y\nproperty float z\n";
+    header += "element face " + std::to_string(mesh.triangles.size()) + "\n";
+    header += "property list uchar int vertex_indices\nend_header\n";
+
+    std::vector<char> body;
+    body.reserve(mesh.vertices.size() * 12 + mesh.triangles.size() * 13);
+    const auto put = [&body](const void* data, std::size_t size) {
+        const char* bytes = static_cast<const char*>(data);
+        if constexpr (std::endian::native == std::endian::little) {
+            body.insert(body.end(), bytes, bytes + size);
+        } else {
+            for (std::size_t i = size; i-- > 0;) body.push_back(bytes[i]);
+        }
+    };
+    for (const auto& v : mesh.vertices) {
+        for (int k = 0; k < 3; ++k) put(&v[k], sizeof(float));
+    }
+    for (const auto& t : mesh.triangles) {
+        body.push_back(static_cast<char>(3));
+        for (int k = 0; k < 3; ++k) {
+            const std::int32_t index = t[k];
+            put(&index, sizeof(index));
+        }
+    }
+
+    std::string temp = path + ".XXXXXX";
+    const int fd = ::mkstemp(temp.data());
+    if (fd < 0)
+        throw IoError(file_message(path, 0, std::string("cannot create: ") + std::strerror(errno)));
+    bool ok = ::fchmod(fd, 0644) == 0;
+    const auto write_all = [fd](const char* data, std::size_t size) {
+        while (size > 0) {
+            const ssize_t n = ::write(fd, data, size);
+            if (n < 0) {
+                if (errno == EINTR) continue;
+                return false;
+            }
+            data += n;
+            size -= static_cast<std::size_t>(n);
+        }
+        return true;
+    };
+    ok = ok && write_all(header.data(), header.size()) && write_all(body.data(), body.size());
+    const int saved_errno = errno;
+    ok = (::close(fd) == 0) && ok;
+    if (!ok || std::rename(temp.c_str(), path.c_str()) != 0) {
+        const int error = ok ? errno : saved_errno;
+        ::unlink(temp.c_str());
+        throw IoError(file_message(path, 0, std::string("cannot write: ") + std::strerror(error)));
+    }
+}
+
+}  // namespace esf

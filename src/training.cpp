@@ -1,0 +1,595 @@
+#include "esf/training.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string_view>
+#include <utility>
+
+#include "esf/error.hpp"
+#include "esf/mesh.hpp"
+#include "esf/parallel.hpp"
+
+namespace esf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+bool hidden(const fs::path& p) {
+    const auto name = p.filename().string();
+    return name.empty() || name.front() == '.';
+}
+
+/// SplitMix64's output function: a bijective 64-bit mixer.
+std::uint64_t mix64(std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/// FNV-1a, a fixed string hash (std::hash may differ between library versions).
+std::uint64_t fnv1a(std::string_view s) {
+    std::uint64_t h = 0xCBF29CE484222325ull;
+    for (const char c : s) {
+        h ^= static_cast<unsigned char>(c);
+        h *= 0x100000001B3ull;
+    }
+    return h;
+}
+
+// ---- catalog CSV ----------------------------------------------------------------------------
+
+/// Reads one RFC 4180 record; false at the end of the input. `line` is the record's first line
+/// on return and advances past it.
+bool read_record(std::istream& in, const std::string& path, std::size_t& line,
+                 std::size_t& record_line, std::vector<std::string>& fields) {
+    fields.clear();
+    if (in.peek() == std::char_traits<char>::eof()) return false;
+    record_line = line;
+    std::string field;
+    bool quoted = false;
+    bool after_quote = false;
+    for (;;) {
+        const int c = in.get();
+        if (c == std::char_traits<char>::eof()) {
+            if (quoted) throw IoError(file_message(path, record_line, "unterminated quoted field"));
+            break;
+        }
+        if (quoted) {
+            if (c == '"') {
+                if (in.peek() == '"') {
+                    in.get();
+                    field += '"';
+                } else {
+                    quoted = false;
+                    after_quote = true;
+                }
+            } else {
+                if (c == '\n') ++line;
+                field += static_cast<char>(c);
+            }
+            continue;
+        }
+        if (c == ',') {
+            fields.push_back(std::move(field));
+            field.clear();
+            after_quote = false;
+        } else if (c == '\n') {
+            ++line;
+            break;
+        } else if (c == '\r') {
+            // CRLF line ends
+        } else if (c == '"' && field.empty() && !after_quote) {
+            quoted = true;
+        } else {
+            if (after_quote)
+                throw IoError(file_message(path, record_line, "text after a closing quote"));
+            field += static_cast<char>(c);
+        }
+    }
+    fields.push_back(std::move(field));
+    return true;
+}
+
+std::string trim(const std::string& s) {
+    const auto b = s.find_first_not_of(" \t");
+    if (b == std::string::npos) return {};
+    return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+/// Longest sides (metres) of typical household objects, for categories whose catalog has no
+/// metric model to learn a size from.
+const std::map<std::string, double>& typical_extents() {
+    static const std::map<std::string, double> table = {
+        {"apple", 0.08},        {"ball", 0.10},         {"banana", 0.19},    {"block", 0.06},
+        {"bottle", 0.25},       {"bowl", 0.16},         {"box", 0.18},       {"can", 0.11},
+        {"clamp", 0.15},        {"cup", 0.09},          {"cutlery", 0.20},   {"donut", 0.10},
+        {"drill", 0.20},        {"figurine", 0.10},     {"fruit", 0.08},     {"glass", 0.12},
+        {"hammer", 0.33},       {"mug", 0.11},          {"pitcher", 0.22},   {"plate", 0.25},
+        {"scissors", 0.20},     {"screwdriver", 0.20},  {"spray", 0.20},     {"tetra_pak", 0.20},
+        {"toilet_paper", 0.12}, {"toy_airplane", 0.25}, {"toy_brick", 0.06}, {"toy_car", 0.12},
+        {"tube", 0.17},         {"wrench", 0.20},
+    };
+    return table;
+}
+
+// ---- training -------------------------------------------------------------------------------
+
+void validate(const TrainingOptions& options) {
+    if (options.min_points < 3)
+        throw std::invalid_argument("min_points must be >= 3 (ESF needs a triangle), got " +
+                                    std::to_string(options.min_points));
+    resolve_threads(options.threads);
+    if (options.descriptor == "esf")
+        EsfEstimator check(options.esf);  // throws std::invalid_argument for bad ESF options
+    else  // throws for an unknown name (listing the valid ones) or options out of range
+        make_descriptor(options.descriptor, options.descriptor_options);
+    // The renderer checks its options (level, camera, noise, fill, scale) when built: build one
+    // for a tetrahedron so that bad options fail now, not as a failure of every model.
+    Mesh tetrahedron;
+    tetrahedron.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    tetrahedron.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    RenderOptions render = options.render;
+    render.distance.reset();  // depends on the model's size, checked per model
+    MeshRenderer probe(tetrahedron, render);
+    if (options.render.distance &&
+        !(std::isfinite(*options.render.distance) && *options.render.distance > 0.0))
+        throw std::invalid_argument("camera distance must be positive and finite");
+}
+
+/// A real setting, or "none" when unset.
+SettingValue optional_value(const std::optional<double>& value) {
+    return value ? SettingValue(*value) : SettingValue(std::string("none"));
+}
+
+SettingValue seed_value(std::uint64_t seed) {
+    if (seed <= static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
+        return static_cast<std::int64_t>(seed);
+    return std::to_string(seed);
+}
+
+/// Throws when the database was made with other settings, naming every difference.
+void check_settings(const Database& db, const Settings& wanted) {
+    const Settings stored = db.settings();
+    // Another descriptor: say so first, not only as one difference among many.
+    const auto stored_descriptor = stored.find("descriptor");
+    const auto wanted_descriptor = wanted.find("descriptor");
+    if (stored_descriptor != stored.end() && wanted_descriptor != wanted.end() &&
+        stored_descriptor->second != wanted_descriptor->second)
+        throw std::invalid_argument(
+            file_message(db.path(), 0,
+                         "database holds " + to_string(stored_descriptor->second) +
+                             " descriptors, not " + to_string(wanted_descriptor->second) +
+                             " (setting descriptor " + to_string(wanted_descriptor->second) +
+                             ", database: " + to_string(stored_descriptor->second) +
+                             "); train each descriptor into its own database"));
+    std::string differences;
+    auto add = [&](const std::string& text) {
+        differences += (differences.empty() ? "" : ", ") + text;
+    };
+    for (const auto& [key, value] : wanted) {
+        const auto it = stored.find(key);
+        if (it == stored.end())
+            add(key + " " + to_string(value) + " (database: unset)");
+        else if (it->second != value)
+            add(key + " " + to_string(value) + " (database: " + to_string(it->second) + ")");
+    }
+    for (const auto& [key, value] : stored)
+        if (!wanted.count(key)) add(key + " unset (database: " + to_string(value) + ")");
+    if (!differences.empty())
+        throw std::invalid_argument(
+            file_message(db.path(), 0,
+                         "database was trained with other settings: " + differences +
+                             "; train with the same options to resume, or into a new database"));
+}
+
+/// A model being trained: its inputs, its renderer, then the entry to store.
+struct Job {
+    const ModelFile* file = nullptr;
+    std::string group;
+    bool rescale = false;        ///< non-metric: scale to target_extent
+    double extent = 0.0;         ///< catalog extent (file units); 0: the mesh's bounding box
+    double target_extent = 0.0;  ///< metres
+    std::uint64_t seed = 0;
+    std::unique_ptr<MeshRenderer> renderer;
+    ModelEntry entry;
+};
+
+/// Loads the mesh and builds its renderer; a failure marks the model failed.
+void prepare_job(Job& job, const TrainingOptions& options) {
+    job.entry.category = job.file->category;
+    job.entry.name = job.file->name;
+    job.entry.file = job.file->file;
+    job.entry.group = job.group;
+    try {
+        const Mesh mesh = load_mesh(job.file->path);
+        RenderOptions render = options.render;
+        render.seed = job.seed;
+        if (job.rescale) {
+            double extent = job.extent;
+            if (!(extent > 0.0))
+                extent = static_cast<double>((mesh.max_corner() - mesh.min_corner()).maxCoeff());
+            if (!(extent > 0.0) || !std::isfinite(extent))
+                throw std::invalid_argument(job.file->path + ": mesh has no extent to rescale");
+            render.scale = job.target_extent / extent;
+            render.target_extent.reset();
+        }
+        job.renderer = std::make_unique<MeshRenderer>(mesh, render);
+        job.entry.scale = job.renderer->scale();
+        job.entry.views.resize(job.renderer->view_count());
+    } catch (const std::exception& e) {
+        const std::string what = e.what();
+        job.entry.error =
+            what.find(job.file->path) == std::string::npos ? job.file->path + ": " + what : what;
+        job.renderer.reset();
+        job.entry.views.clear();
+    }
+}
+
+/// Renders view `v` of a job and describes it (or records why it is skipped). `baseline` is the
+/// descriptor when it is not "esf".
+void describe_view(Job& job, std::size_t v, const TrainingOptions& options,
+                   const GlobalDescriptor* baseline) {
+    ViewEntry& view = job.entry.views[v];
+    view.index = static_cast<int>(v);
+    RenderedView rendered;
+    try {
+        rendered = job.renderer->render_view(v);
+    } catch (const std::exception& e) {
+        view.skip_reason = std::string("rendering failed: ") + e.what();
+        return;
+    }
+    view.index = rendered.index;
+    view.points = rendered.points.size();
+    view.pose = rendered.pose;
+    if (view.points < options.min_points) {
+        view.skip_reason = "too few points (" + std::to_string(view.points) + " < " +
+                           std::to_string(options.min_points) + ")";
+        return;
+    }
+    const std::uint64_t seed = view_seed(job.seed, rendered.index);
+    if (!baseline) {
+        EsfOptions esf = options.esf;
+        esf.seed = seed;
+        try {
+            const EsfResult result = EsfEstimator(esf).compute(rendered.points);
+            view.descriptors.assign(result.descriptor.begin(), result.descriptor.end());
+        } catch (const std::invalid_argument& e) {
+            view.skip_reason = e.what();
+        }
+        return;
+    }
+    // The seeded baselines (sdvs, d2) draw from the view's seed, as esf does; one object per
+    // view (cheap next to describing it), the others ignore the seed.
+    DescriptorOptions descriptor_options = options.descriptor_options;
+    descriptor_options.seed = seed;
+    const auto descriptor = make_descriptor(baseline->info().name, descriptor_options);
+    std::vector<Signature> signatures;
+    try {
+        signatures = descriptor->compute(rendered.points);
+    } catch (const std::invalid_argument& e) {
+        view.skip_reason = e.what();
+        return;
+    } catch (const std::runtime_error& e) {  // PCL's exceptions
+        view.skip_reason = descriptor->info().name + ": " + e.what();
+        return;
+    }
+    const auto dim = static_cast<std::size_t>(descriptor->info().dimension);
+    for (const Signature& s : signatures) {
+        if (s.size() != dim) {  // a broken descriptor: refuse the view rather than store it
+            view.descriptors.clear();
+            view.skip_reason = descriptor->info().name + ": a signature of " +
+                               std::to_string(s.size()) + " floats, expected " +
+                               std::to_string(dim);
+            return;
+        }
+        view.descriptors.insert(view.descriptors.end(), s.begin(), s.end());
+    }
+    if (view.descriptors.empty()) view.skip_reason = descriptor->info().name + ": no signature";
+}
+
+}  // namespace
+
+const std::vector<std::string>& mesh_extensions() {
+    static const std::vector<std::string> extensions = {"ply", "obj", "off", "stl", "gltf",
+                                                        "glb", "dae", "3ds", "fbx"};
+    return extensions;
+}
+
+std::vector<ModelFile> find_models(const std::string& root) {
+    std::error_code ec;
+    if (!fs::is_directory(root, ec))
+        throw IoError(
+            file_message(root, 0, fs::exists(root, ec) ? "not a folder" : "no such folder"));
+    const auto& extensions = mesh_extensions();
+    std::vector<ModelFile> out;
+    try {
+        for (const auto& category : fs::directory_iterator(root)) {
+            if (hidden(category.path()) || !category.is_directory()) continue;
+            for (const auto& entry : fs::directory_iterator(category.path())) {
+                if (hidden(entry.path()) || !entry.is_regular_file()) continue;
+                auto ext = lower(entry.path().extension().string());
+                if (ext.size() < 2) continue;
+                ext.erase(0, 1);
+                if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end())
+                    continue;
+                ModelFile m;
+                m.category = category.path().filename().string();
+                m.name = entry.path().stem().string();
+                m.file = m.category + "/" + entry.path().filename().string();
+                m.path = entry.path().string();
+                out.push_back(std::move(m));
+            }
+        }
+    } catch (const fs::filesystem_error& e) {
+        throw IoError(file_message(e.path1().string(), 0, e.code().message()));
+    }
+    std::sort(out.begin(), out.end(), [](const ModelFile& a, const ModelFile& b) {
+        return std::tie(a.category, a.name, a.file) < std::tie(b.category, b.name, b.file);
+    });
+    for (std::size_t i = 1; i < out.size(); ++i)
+        if (out[i].category == out[i - 1].category && out[i].name == out[i - 1].name)
+            throw std::invalid_argument(
+                file_message(root, 0,
+                             "two meshes share the model name '" + out[i].category + "/" +
+                                 out[i].name + "': " + out[i - 1].file + " and " + out[i].file));
+    return out;
+}
+
+const CatalogEntry* Catalog::find(const std::string& file) const {
+    for (const auto& e : entries)
+        if (e.file == file) return &e;
+    return nullptr;
+}
+
+Catalog read_catalog(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(file_message(path, 0, "cannot open catalog"));
+    std::size_t line = 1, record_line = 1;
+    std::vector<std::string> fields;
+    if (!read_record(in, path, line, record_line, fields))
+        throw IoError(file_message(path, 0, "empty catalog (expected a header line)"));
+    std::map<std::string, std::size_t> column;
+    for (std::size_t i = 0; i < fields.size(); ++i) column[lower(trim(fields[i]))] = i;
+    if (!column.count("file")) throw IoError(file_message(path, 1, "header has no 'file' column"));
+    const std::size_t columns = fields.size();
+    auto get = [&](const char* name) -> std::string {
+        const auto it = column.find(name);
+        return it == column.end() ? std::string() : trim(fields[it->second]);
+    };
+    Catalog catalog;
+    while (read_record(in, path, line, record_line, fields)) {
+        if (fields.size() == 1 && trim(fields[0]).empty()) continue;  // blank line
+        if (fields.size() != columns)
+            throw IoError(file_message(path, record_line,
+                                       std::to_string(fields.size()) + " fields, the header has " +
+                                           std::to_string(columns)));
+        CatalogEntry e;
+        e.file = get("file");
+        if (e.file.empty()) throw IoError(file_message(path, record_line, "empty 'file'"));
+        e.category = get("category");
+        e.group = get("group");
+        const std::string extent = get("extent");
+        if (!extent.empty()) {
+            std::size_t used = 0;
+            try {
+                e.extent = std::stod(extent, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used != extent.size() || !std::isfinite(e.extent) || e.extent < 0.0)
+                throw IoError(
+                    file_message(path, record_line, "extent '" + extent + "' is not a size"));
+        }
+        const std::string metric = lower(get("metric"));
+        if (metric == "no" || metric == "false" || metric == "0") {
+            e.metric = false;
+        } else if (!(metric.empty() || metric == "yes" || metric == "true" || metric == "1")) {
+            throw IoError(
+                file_message(path, record_line, "metric '" + metric + "' is not yes or no"));
+        }
+        catalog.entries.push_back(std::move(e));
+    }
+    return catalog;
+}
+
+double typical_extent(const Catalog& catalog, const std::string& category) {
+    std::vector<double> extents;
+    for (const auto& e : catalog.entries) {
+        const auto slash = e.file.find('/');
+        const std::string c = e.category.empty() ? e.file.substr(0, slash) : e.category;
+        if (e.metric && e.extent > 0.0 && c == category) extents.push_back(e.extent);
+    }
+    if (!extents.empty()) {
+        std::sort(extents.begin(), extents.end());
+        const std::size_t n = extents.size();
+        return n % 2 ? extents[n / 2] : 0.5 * (extents[n / 2 - 1] + extents[n / 2]);
+    }
+    const auto& table = typical_extents();
+    const auto it = table.find(category);
+    return it == table.end() ? kDefaultTypicalExtent : it->second;
+}
+
+std::uint64_t model_seed(std::uint64_t seed, const std::string& category, const std::string& name) {
+    return mix64(seed ^ mix64(fnv1a(category + "/" + name)));
+}
+
+std::uint64_t view_seed(std::uint64_t model_seed_value, int view_index) {
+    return mix64(model_seed_value +
+                 0x9E3779B97F4A7C15ull * (static_cast<std::uint64_t>(view_index) + 1));
+}
+
+Settings training_settings(const TrainingOptions& options, bool rescale_non_metric) {
+    const auto& r = options.render;
+    Settings settings;
+    if (options.descriptor == "esf") {
+        const auto& e = options.esf;
+        settings = {
+            {"descriptor", std::string("esf")},
+            {"descriptor_version", std::int64_t{kEsfVersion}},
+            {"descriptor_dimension", std::int64_t{kEsfSize}},
+            {"esf_samples", std::int64_t{e.samples}},
+            {"esf_grid_size", std::int64_t{e.grid_size}},
+            {"esf_sampler", std::string(to_string(e.sampler))},
+            {"esf_max_attempts_per_sample", std::int64_t{e.max_attempts_per_sample}},
+        };
+    } else {
+        const auto& d = options.descriptor_options;
+        const auto descriptor = make_descriptor(options.descriptor, d);
+        settings = {
+            {"descriptor", options.descriptor},
+            {"descriptor_version", std::int64_t{kBaselineDescriptorVersion}},
+            {"descriptor_dimension", std::int64_t{descriptor->info().dimension}},
+            {"descriptor_samples", std::int64_t{d.samples}},
+            {"descriptor_leaf_factor", static_cast<double>(d.leaf_factor)},
+            {"descriptor_normal_radius_factor", static_cast<double>(d.normal_radius_factor)},
+            {"descriptor_remove_outliers", std::int64_t{d.remove_outliers ? 1 : 0}},
+        };
+    }
+    Settings common = {
+        {"seed", seed_value(options.seed)},
+        {"view_sphere_level", std::int64_t{r.level}},
+        {"camera_width", std::int64_t{r.camera.width}},
+        {"camera_height", std::int64_t{r.camera.height}},
+        {"camera_fx", r.camera.fx},
+        {"camera_fy", r.camera.fy},
+        {"camera_cx", r.camera.cx},
+        {"camera_cy", r.camera.cy},
+        {"fill_fraction", r.fill_fraction},
+        {"camera_distance", optional_value(r.distance)},
+        {"model_scale", r.scale},
+        {"target_extent", optional_value(r.target_extent)},
+        {"noise", std::string(to_string(r.noise))},
+        {"min_points", static_cast<std::int64_t>(options.min_points)},
+        {"rescale_non_metric", std::string(rescale_non_metric ? "category_extent" : "none")},
+    };
+    settings.merge(common);
+    return settings;
+}
+
+TrainingResult train(const std::string& root, Database& database, const TrainingOptions& options) {
+    validate(options);
+    if (!database.writable())
+        throw std::invalid_argument(
+            file_message(database.path(), 0, "database is opened read-only"));
+    const std::vector<ModelFile> files = find_models(root);
+    if (files.empty())
+        throw std::invalid_argument(file_message(
+            root, 0, "no meshes found (expected ROOT/<category>/<model>.ply, .obj, .off, ...)"));
+
+    Catalog catalog;
+    bool have_catalog = false;
+    if (options.use_catalog) {
+        std::string path = options.catalog;
+        if (path.empty() && fs::exists(fs::path(root) / "catalog.csv"))
+            path = (fs::path(root) / "catalog.csv").string();
+        if (!path.empty()) {
+            catalog = read_catalog(path);
+            have_catalog = true;
+        }
+    }
+
+    const Settings settings = training_settings(options, have_catalog);
+    if (database.settings().empty() && database.models().empty())
+        database.set_settings(settings);
+    else
+        check_settings(database, settings);
+    const std::string& descriptor_name = options.descriptor;
+    std::unique_ptr<GlobalDescriptor> baseline;
+    if (descriptor_name == "esf") {
+        database.add_descriptor_kind({descriptor_name, kEsfVersion, kEsfSize});
+    } else {
+        baseline = make_descriptor(descriptor_name, options.descriptor_options);
+        database.add_descriptor_kind(
+            {descriptor_name, kBaselineDescriptorVersion, baseline->info().dimension});
+    }
+
+    TrainingResult result;
+    result.models_total = files.size();
+    std::vector<Job> jobs;
+    for (const auto& f : files) {
+        if (database.model_status(f.category, f.name) == ModelStatus::kComplete) {
+            ++result.models_existing;
+            continue;
+        }
+        Job job;
+        job.file = &f;
+        job.group = f.name;
+        job.seed = model_seed(options.seed, f.category, f.name);
+        if (const CatalogEntry* entry = have_catalog ? catalog.find(f.file) : nullptr) {
+            if (!entry->group.empty()) job.group = entry->group;
+            if (!entry->metric) {
+                job.rescale = true;
+                job.extent = entry->extent;
+                job.target_extent = typical_extent(catalog, f.category);
+            }
+        }
+        jobs.push_back(std::move(job));
+    }
+
+    TrainingProgress progress;
+    progress.models_total = result.models_total;
+    progress.models_existing = result.models_existing;
+    progress.models_done = result.models_existing;
+    if (options.progress) options.progress(progress);
+
+    // Models go in batches: meshes load and their renderers are built in parallel, then every
+    // view of the batch is rendered and described in parallel (one view per task, so large and
+    // small models balance), then the models are committed one by one, in order.
+    const int threads = resolve_threads(options.threads);
+    const std::size_t batch = 2 * static_cast<std::size_t>(threads);
+    for (std::size_t first = 0; first < jobs.size(); first += batch) {
+        const std::size_t count = std::min(batch, jobs.size() - first);
+        parallel_for(count, threads, [&](std::size_t i) { prepare_job(jobs[first + i], options); });
+
+        std::vector<std::pair<std::size_t, std::size_t>> views;  // (job, view)
+        for (std::size_t i = first; i < first + count; ++i)
+            for (std::size_t v = 0; v < jobs[i].entry.views.size(); ++v) views.emplace_back(i, v);
+        parallel_for(views.size(), threads, [&](std::size_t k) {
+            describe_view(jobs[views[k].first], views[k].second, options, baseline.get());
+        });
+
+        for (std::size_t i = first; i < first + count; ++i) {
+            Job& job = jobs[i];
+            job.renderer.reset();
+            database.write_model(job.entry, descriptor_name);
+            const std::string name = job.entry.category + "/" + job.entry.name;
+            if (!job.entry.error.empty()) {
+                ++result.models_failed;
+                result.failures.push_back({name, job.entry.error});
+            } else {
+                ++result.models_trained;
+                for (const auto& v : job.entry.views) {
+                    if (v.skipped())
+                        ++result.views_skipped;
+                    else
+                        ++result.views;
+                }
+            }
+            job.entry = {};
+            progress.models_done =
+                result.models_existing + result.models_trained + result.models_failed;
+            progress.models_failed = result.models_failed;
+            progress.views = result.views;
+            progress.views_skipped = result.views_skipped;
+            progress.model = name;
+            if (options.progress) options.progress(progress);
+        }
+    }
+    return result;
+}
+
+}  // namespace esf

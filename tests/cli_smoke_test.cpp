@@ -1,0 +1,189 @@
+// Runs the built `esf` binary (ESF_CLI) on small generated inputs: help, describe, classify and
+// scene, and the error paths (missing file, corrupt database): exit codes, stdout, stderr.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "esf/cloud_io.hpp"
+#include "esf/database.hpp"
+#include "esf/esf_descriptor.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+    int code = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string read_text(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+class CliSmokeTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("esf_cli_smoke_" + std::to_string(::getpid()) + "_" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    CliRun esf(const std::string& args) const {
+        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+        const std::string command = quoted(ESF_CLI) + " " + args + " >" + quoted(out.string()) +
+                                    " 2>" + quoted(err.string());
+        const int status = std::system(command.c_str());
+        CliRun run;
+        run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        run.out = read_text(out);
+        run.err = read_text(err);
+        return run;
+    }
+
+    /// A closed box surface, 6 cm x 4 cm x 10 cm, 1 mm grid, as x y z text.
+    std::string write_box(const std::string& name) const {
+        esf::PointCloud cloud;
+        std::mt19937_64 rng(1);
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        const Eigen::Vector3f size(0.06f, 0.04f, 0.10f);
+        for (int i = 0; i < 3000; ++i) {
+            Eigen::Vector3f p(u(rng), u(rng), u(rng));
+            const int face = i % 6;
+            p[face / 2] = float(face % 2);
+            cloud.points.push_back(p.cwiseProduct(size) + Eigen::Vector3f(0, 0, 1));
+        }
+        cloud.width = static_cast<std::uint32_t>(cloud.points.size());
+        const std::string path = (dir_ / name).string();
+        esf::write_pcd(path, cloud);
+        return path;
+    }
+
+    fs::path dir_;
+};
+
+std::size_t lines(const std::string& s) {
+    std::size_t n = 0;
+    for (const char c : s) n += c == '\n';
+    return n;
+}
+
+TEST_F(CliSmokeTest, HelpListsTheCommands) {
+    const CliRun run = esf("--help");
+    EXPECT_EQ(run.code, 0) << run.err;
+    for (const char* command : {"describe", "train", "segment", "classify", "scene"})
+        EXPECT_NE(run.out.find(command), std::string::npos) << command;
+    const CliRun classify = esf("classify --help");
+    EXPECT_EQ(classify.code, 0);
+    EXPECT_NE(classify.out.find("row-major"), std::string::npos);
+}
+
+TEST_F(CliSmokeTest, DescribeWritesOneCsvLinePerFile) {
+    const std::string box = write_box("box.pcd");
+    const CliRun run = esf("describe --samples 2000 " + quoted(box));
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_EQ(lines(run.out), 1u);
+    EXPECT_EQ(run.out.rfind(box + ",", 0), 0u);
+    std::size_t commas = 0;
+    for (const char c : run.out) commas += c == ',';
+    EXPECT_EQ(commas, static_cast<std::size_t>(esf::kEsfSize));
+}
+
+TEST_F(CliSmokeTest, DescribeGoesOnPastAMissingFile) {
+    const std::string box = write_box("box.pcd");
+    const std::string missing = (dir_ / "missing.pcd").string();
+    const CliRun run = esf("describe --samples 2000 " + quoted(box) + " " + quoted(missing));
+    EXPECT_EQ(run.code, 2);
+    EXPECT_EQ(lines(run.out), 1u);  // the good file is still described
+    EXPECT_EQ(lines(run.err), 1u) << run.err;
+    EXPECT_NE(run.err.find("esf: error: " + missing), std::string::npos) << run.err;
+}
+
+TEST_F(CliSmokeTest, ClassifyWithACorruptDatabaseIsOneLine) {
+    const std::string box = write_box("box.pcd");
+    const std::string db = (dir_ / "corrupt.sqlite").string();
+    {
+        std::ofstream out(db, std::ios::binary);
+        out << std::string(2048, 'x');
+    }
+    const CliRun run = esf("classify " + quoted(db) + " " + quoted(box));
+    EXPECT_EQ(run.code, 2);
+    EXPECT_TRUE(run.out.empty()) << run.out;
+    EXPECT_EQ(lines(run.err), 1u) << run.err;
+    EXPECT_EQ(run.err.rfind("esf: error: " + db, 0), 0u) << run.err;
+}
+
+TEST_F(CliSmokeTest, ClassifyPrintsJsonAndReportsBadFiles) {
+    // A database of two "models" whose single views are the descriptors of the box and of a
+    // flat plate, described with the settings the command will use.
+    esf::EsfOptions options;
+    options.samples = 2000;
+    options.seed = 4;
+    const std::string box = write_box("box.pcd");
+    esf::Points plate;
+    for (int i = 0; i < 60; ++i)
+        for (int j = 0; j < 60; ++j) plate.push_back({0.002f * float(i), 0.002f * float(j), 1.0f});
+    const std::string db_path = (dir_ / "db.sqlite").string();
+    {
+        esf::Database db(db_path, esf::OpenMode::kWrite);
+        db.set_settings({{"esf_samples", std::int64_t{2000}}, {"seed", std::int64_t{4}}});
+        db.add_descriptor_kind({"esf", esf::kEsfVersion, esf::kEsfSize});
+        const std::vector<std::pair<std::string, esf::Points>> models = {
+            {"box", esf::read_cloud(box).points}, {"plate", plate}};
+        for (const auto& [name, points] : models) {
+            esf::ModelEntry model;
+            model.category = name;
+            model.name = name + "_1";
+            model.file = name + "/" + name + "_1.ply";
+            esf::ViewEntry view;
+            view.points = points.size();
+            const esf::EsfResult r = esf::compute_esf(points, options);
+            view.descriptors.assign(r.descriptor.begin(), r.descriptor.end());
+            model.views.push_back(view);
+            db.write_model(model, "esf");
+        }
+    }
+    const std::string missing = (dir_ / "missing.pcd").string();
+    const CliRun run =
+        esf("classify --json -k 2 " + quoted(db_path) + " " + quoted(box) + " " + quoted(missing));
+    EXPECT_EQ(run.code, 2);
+    EXPECT_EQ(lines(run.err), 1u) << run.err;
+    EXPECT_NE(run.err.find(missing), std::string::npos);
+    const nlohmann::json out = nlohmann::json::parse(run.out);
+    ASSERT_EQ(out.size(), 1u);
+    EXPECT_EQ(out[0]["file"], box);
+    EXPECT_EQ(out[0]["class"], "box");
+    EXPECT_EQ(out[0]["model"], "box_1");
+    EXPECT_EQ(out[0]["distance"], 0.0);  // the same cloud, the same settings
+    EXPECT_EQ(out[0]["confidence"], 0.5);
+    ASSERT_EQ(out[0]["neighbours"].size(), 2u);
+    EXPECT_EQ(out[0]["neighbours"][1]["class"], "plate");
+    EXPECT_EQ(out[0]["neighbours"][0]["pose"].size(), 16u);
+
+    const CliRun table = esf("classify " + quoted(db_path) + " " + quoted(box));
+    EXPECT_EQ(table.code, 0) << table.err;
+    EXPECT_EQ(lines(table.out), 2u);  // header + one row
+    EXPECT_NE(table.out.find("box_1"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,313 @@
+#include "esf/mesh.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "esf/error.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using Triangle = std::array<std::array<float, 3>, 3>;
+
+class MeshTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("esf_mesh_test_" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::string write(const std::string& name, const std::string& text) const {
+        const std::string path = (dir_ / name).string();
+        std::ofstream(path, std::ios::binary) << text;
+        return path;
+    }
+
+    fs::path dir_;
+};
+
+// Each triangle as its three corner positions, rotated so the smallest corner comes first
+// (the winding is kept), so meshes compare whatever their vertex numbering.
+std::multiset<Triangle> triangle_set(const esf::Mesh& mesh) {
+    std::multiset<Triangle> out;
+    for (const auto& t : mesh.triangles) {
+        Triangle tri;
+        for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector3f& v = mesh.vertices[static_cast<std::size_t>(t[k])];
+            tri[static_cast<std::size_t>(k)] = {v.x(), v.y(), v.z()};
+        }
+        const auto first = std::min_element(tri.begin(), tri.end());
+        std::rotate(tri.begin(), first, tri.end());
+        out.insert(tri);
+    }
+    return out;
+}
+
+std::multiset<Triangle> triangles_of(std::initializer_list<Triangle> list) {
+    std::multiset<Triangle> out;
+    for (Triangle tri : list) {
+        const auto first = std::min_element(tri.begin(), tri.end());
+        std::rotate(tri.begin(), first, tri.end());
+        out.insert(tri);
+    }
+    return out;
+}
+
+template <typename F>
+std::string error_of(F&& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "(no exception)";
+}
+
+TEST_F(MeshTest, ObjQuadIsTriangulatedAndObjectsAreMerged) {
+    // A unit quad (one polygon, two triangles after triangulation) and a separate triangle in a
+    // second object: 3 triangles, 4 + 3 vertices.
+    const std::string path = write("two.obj",
+                                   "o quad\n"
+                                   "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                   "f 1 2 3 4\n"
+                                   "o tri\n"
+                                   "v 0 0 5\nv 2 0 5\nv 0 3 5\n"
+                                   "f 5 6 7\n");
+    const esf::Mesh mesh = esf::load_mesh(path);
+    EXPECT_EQ(mesh.triangles.size(), 3u);
+    EXPECT_EQ(mesh.vertices.size(), 7u);
+    EXPECT_EQ(mesh.min_corner(), Eigen::Vector3f(0, 0, 0));
+    EXPECT_EQ(mesh.max_corner(), Eigen::Vector3f(2, 3, 5));
+    EXPECT_EQ(triangle_set(mesh), triangles_of({{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}},
+                                                {{{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+                                                {{{0, 0, 5}, {2, 0, 5}, {0, 3, 5}}}}));
+}
+
+TEST_F(MeshTest, OffTetrahedron) {
+    const std::string path = write("tet.off",
+                                   "OFF\n4 4 6\n"
+                                   "0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                   "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    const esf::Mesh mesh = esf::load_mesh(path);
+    EXPECT_EQ(mesh.vertices.size(), 4u);
+    EXPECT_EQ(triangle_set(mesh), triangles_of({{{{0, 0, 0}, {0, 1, 0}, {1, 0, 0}}},
+                                                {{{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}},
+                                                {{{0, 0, 0}, {0, 0, 1}, {0, 1, 0}}},
+                                                {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}}));
+}
+
+TEST_F(MeshTest, StlCornersAreJoined) {
+    // STL stores three corners per facet: 12 corners of a tetrahedron become 4 vertices.
+    std::string stl = "solid tet\n";
+    const std::array<std::array<const char*, 3>, 4> facets = {{{"0 0 0", "0 1 0", "1 0 0"},
+                                                               {"0 0 0", "1 0 0", "0 0 1"},
+                                                               {"0 0 0", "0 0 1", "0 1 0"},
+                                                               {"1 0 0", "0 1 0", "0 0 1"}}};
+    for (const auto& f : facets) {
+        stl += "facet normal 0 0 0\nouter loop\n";
+        for (const char* v : f) stl += std::string("vertex ") + v + "\n";
+        stl += "endloop\nendfacet\n";
+    }
+    stl += "endsolid tet\n";
+    const esf::Mesh mesh = esf::load_mesh(write("tet.stl", stl));
+    EXPECT_EQ(mesh.triangles.size(), 4u);
+    EXPECT_EQ(mesh.vertices.size(), 4u);
+}
+
+std::string base64(const std::vector<std::uint8_t>& bytes) {
+    static const char* kAlphabet =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (std::size_t i = 0; i < bytes.size(); i += 3) {
+        std::uint32_t n = static_cast<std::uint32_t>(bytes[i]) << 16;
+        if (i + 1 < bytes.size()) n |= static_cast<std::uint32_t>(bytes[i + 1]) << 8;
+        if (i + 2 < bytes.size()) n |= bytes[i + 2];
+        out += kAlphabet[(n >> 18) & 63];
+        out += kAlphabet[(n >> 12) & 63];
+        out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
+        out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
+    }
+    return out;
+}
+
+TEST_F(MeshTest, GltfNodeTransformsAreApplied) {
+    // One triangle (0,0,0) (1,0,0) (0,1,0), used by a parent node translated by (10, 0, 0) and by
+    // its child scaled by 2: the child's copy is translate(10,0,0) * scale(2) applied.
+    std::vector<std::uint8_t> buffer(44, 0);
+    const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const std::uint16_t indices[3] = {0, 1, 2};
+    std::memcpy(buffer.data(), positions, sizeof(positions));
+    std::memcpy(buffer.data() + 36, indices, sizeof(indices));
+    const std::string gltf = R"({
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0, "translation": [10, 0, 0], "children": [1]},
+            {"mesh": 0, "scale": [2, 2, 2]}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,)" +
+                             base64(buffer) + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                  {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+})";
+    const esf::Mesh mesh = esf::load_mesh(write("nodes.gltf", gltf));
+    EXPECT_EQ(triangle_set(mesh), triangles_of({{{{10, 0, 0}, {11, 0, 0}, {10, 1, 0}}},
+                                                {{{10, 0, 0}, {12, 0, 0}, {10, 2, 0}}}}));
+}
+
+TEST_F(MeshTest, DegenerateTrianglesAndUnusedVerticesAreDropped) {
+    // Vertex 5 is unused; face 1 1 2 repeats a vertex.
+    const std::string path = write("messy.obj",
+                                   "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 7 7 7\nv 0 0 1\n"
+                                   "f 1 2 3\nf 1 2 5\nf 2 2 3\n");
+    const esf::Mesh mesh = esf::load_mesh(path);
+    EXPECT_EQ(mesh.triangles.size(), 2u);
+    EXPECT_EQ(mesh.vertices.size(), 4u);
+    EXPECT_EQ(mesh.max_corner(), Eigen::Vector3f(1, 1, 1));
+}
+
+TEST_F(MeshTest, PlyRoundTripIsExact) {
+    esf::Mesh mesh;
+    mesh.vertices = {
+        {0.1f, -0.2f, 0.3f}, {1e-7f, 2.5f, -3.25f}, {-4.f, 5.f, 6.125f}, {0.f, 0.f, 1.f}};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {3, 1, 0}};
+    const std::string path = (dir_ / "out.ply").string();
+    esf::write_ply_mesh(path, mesh);
+
+    std::ifstream in(path, std::ios::binary);
+    std::string header;
+    for (std::string line; std::getline(in, line) && line != "end_header";) header += line + "\n";
+    EXPECT_NE(header.find("format binary_little_endian 1.0"), std::string::npos);
+    EXPECT_NE(header.find("element vertex 4"), std::string::npos);
+    EXPECT_NE(header.find("element face 3"), std::string::npos);
+    EXPECT_EQ(fs::file_size(path), header.size() + 11 + 4 * 12 + 3 * 13);
+
+    const esf::Mesh back = esf::load_mesh(path);
+    EXPECT_EQ(triangle_set(back), triangle_set(mesh));
+    // No temporary file is left beside it.
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+}
+
+TEST_F(MeshTest, MinMaxCornerOfEmptyMeshThrows) {
+    const esf::Mesh empty;
+    EXPECT_THROW((void)empty.min_corner(), std::invalid_argument);
+    EXPECT_THROW((void)empty.max_corner(), std::invalid_argument);
+}
+
+TEST_F(MeshTest, LoadErrorsNameTheFile) {
+    const std::string missing = (dir_ / "missing.obj").string();
+    EXPECT_THROW(esf::load_mesh(missing), esf::IoError);
+    EXPECT_EQ(error_of([&] { esf::load_mesh(missing); }), missing + ": no such file");
+
+    const std::string empty = write("empty.ply", "");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(empty); }), empty + ": empty file");
+
+    EXPECT_EQ(error_of([&] { esf::load_mesh(dir_.string()); }),
+              dir_.string() + ": is a directory, not a mesh file");
+
+    // Assimp alone would loop forever on this header.
+    const std::string no_end = write("no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(no_end); }),
+              no_end + ": PLY header has no end_header line");
+
+    // 3 vertices (36 bytes) and one face (13 bytes) announced, 20 bytes present.
+    const std::string truncated = write("truncated.ply",
+                                        "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                                        "property float x\nproperty float y\nproperty float z\n"
+                                        "element face 1\nproperty list uchar int vertex_indices\n"
+                                        "end_header\n" +
+                                            std::string(20, '\0'));
+    EXPECT_EQ(error_of([&] { esf::load_mesh(truncated); }),
+              truncated +
+                  ": truncated PLY: the header announces 3 vertex elements, needing at least 36 "
+                  "bytes with those before them, but 20 bytes follow the header");
+
+    const std::string garbage = write("garbage.ply", "PLY\x01\x02 not a header at all");
+    const std::string garbage_error = error_of([&] { esf::load_mesh(garbage); });
+    EXPECT_EQ(garbage_error.rfind(garbage + ": cannot read mesh: ", 0), 0u) << garbage_error;
+    EXPECT_THROW(esf::load_mesh(garbage), esf::IoError);
+
+    const std::string nan = write("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(nan); }), nan + ": has a non-finite vertex");
+
+    const std::string bad_index = write("bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    EXPECT_EQ(
+        error_of([&] { esf::load_mesh(bad_index); }).rfind(bad_index + ": cannot read mesh", 0),
+        0u);
+
+    const std::string unknown = write("cloud.xyz123", "0 0 0\n1 1 1\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(unknown); }).rfind(unknown + ": ", 0), 0u);
+
+    const std::string points = write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    const std::string points_error = error_of([&] { esf::load_mesh(points); });
+    EXPECT_EQ(points_error.rfind(points + ": ", 0), 0u) << points_error;
+    EXPECT_THROW(esf::load_mesh(points), esf::IoError);
+
+    const std::string lines = write("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(lines); }), lines + ": holds no triangle");
+
+    const std::string degenerate = write("degenerate.obj", "v 0 0 0\nv 1 0 0\nf 1 2 2\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(degenerate); }).rfind(degenerate + ": ", 0), 0u);
+}
+
+TEST_F(MeshTest, WriteErrors) {
+    esf::Mesh mesh;
+    mesh.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}};
+    const std::string bad_dir = (dir_ / "no" / "such" / "dir" / "m.ply").string();
+    EXPECT_THROW(esf::write_ply_mesh(bad_dir, mesh), esf::IoError);
+    EXPECT_EQ(error_of([&] { esf::write_ply_mesh(bad_dir, mesh); }),
+              bad_dir + ": cannot create: No such file or directory");
+
+    const std::string path = (dir_ / "m.ply").string();
+    esf::Mesh bad_index = mesh;
+    bad_index.triangles = {{0, 1, 3}};
+    EXPECT_EQ(error_of([&] { esf::write_ply_mesh(path, bad_index); }),
+              path + ": triangle 0 has a vertex index outside [0, 3)");
+    esf::Mesh nan = mesh;
+    nan.vertices[1].y() = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_EQ(error_of([&] { esf::write_ply_mesh(path, nan); }), path + ": vertex 1 is not finite");
+    EXPECT_EQ(error_of([&] { esf::write_ply_mesh(path, esf::Mesh{}); }),
+              path + ": mesh has no triangle");
+    EXPECT_FALSE(fs::exists(path));
+}
+
+TEST(MeshRealData, YcbPlyAndKitObj) {
+    ESF_REQUIRE_DATA("meshes/apple/ycb_013_apple.ply");
+    ESF_REQUIRE_DATA("meshes/bottle/kit_BathDetergent.obj");
+    // YCB 16k scan in metres: 16384 faces; texture seams are joined, extent about 7.5 cm.
+    const esf::Mesh apple =
+        esf::load_mesh(esf::test::data_file("meshes/apple/ycb_013_apple.ply").string());
+    EXPECT_EQ(apple.triangles.size(), 16384u);
+    EXPECT_LE(apple.vertices.size(), 8194u);
+    const Eigen::Vector3f apple_size = apple.max_corner() - apple.min_corner();
+    EXPECT_GT(apple_size.maxCoeff(), 0.06f);
+    EXPECT_LT(apple_size.maxCoeff(), 0.09f);
+    // KIT (Dex-Net) OBJ, 800 faces, middle bounding-box side 45 (mm units).
+    const esf::Mesh kit =
+        esf::load_mesh(esf::test::data_file("meshes/bottle/kit_BathDetergent.obj").string());
+    EXPECT_EQ(kit.triangles.size(), 800u);
+    Eigen::Vector3f kit_size = kit.max_corner() - kit.min_corner();
+    std::sort(kit_size.data(), kit_size.data() + 3);
+    EXPECT_NEAR(kit_size[1], 0.045f, 0.01f);
+}
+
+}  // namespace
