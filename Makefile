@@ -2,6 +2,7 @@
 # first (scripts/install-deps.sh), so they work on a fresh Debian 12 machine.
 BUILD ?= build
 JOBS ?= $(shell nproc)
+DEMO_ARGS ?=
 WERROR ?= ON
 CMAKE_FLAGS ?=
 
@@ -20,7 +21,7 @@ build: configure
 
 demo: configure
 	@cmake --build $(BUILD) -j $(JOBS) --target esf_cli
-	@$(BUILD)/apps/esf/esf demo
+	@$(BUILD)/apps/esf/esf demo $(DEMO_ARGS)
 
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -1,5 +1,7 @@
 #include "esf/esf_descriptor.hpp"
 
+#include <immintrin.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cassert>
@@ -170,6 +172,7 @@ inline std::uint32_t cell_of(float v, int half) {
 struct EsfEstimator::Workspace {
     detail::VoxelGrid grid;
     Points scaled;
+    std::vector<float> xs, ys, zs;  // scaled, one array per axis (for gathers)
     std::vector<std::uint32_t> cells;
     std::vector<Triangle> triangles;
     std::vector<std::uint32_t> line_start, line_end;
@@ -217,17 +220,28 @@ namespace {
 /// Centres the points and scales them so that the farthest lies at radius `half` (Sec. III-A:
 /// translation and scale invariance). Returns false when all points coincide.
 bool normalise_fast(std::span<const Eigen::Vector3f> in, int half, Points& out) {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const auto& p : in) centroid += p.cast<double>();
-    centroid /= static_cast<double>(in.size());
+    double cx = 0.0, cy = 0.0, cz = 0.0;
+    for (const auto& p : in) {
+        cx += p.x();
+        cy += p.y();
+        cz += p.z();
+    }
+    const double count = static_cast<double>(in.size());
+    cx /= count;
+    cy /= count;
+    cz /= count;
     double radius2 = 0.0;
-    for (const auto& p : in)
-        radius2 = std::max(radius2, (p.cast<double>() - centroid).squaredNorm());
+    for (const auto& p : in) {
+        const double x = p.x() - cx, y = p.y() - cy, z = p.z() - cz;
+        radius2 = std::max(radius2, x * x + y * y + z * z);
+    }
     if (!(radius2 > 0.0) || !std::isfinite(radius2)) return false;
     const double scale = half / std::sqrt(radius2);
     out.resize(in.size());
     for (std::size_t i = 0; i < in.size(); ++i)
-        out[i] = ((in[i].cast<double>() - centroid) * scale).cast<float>();
+        out[i] = Eigen::Vector3f(static_cast<float>((in[i].x() - cx) * scale),
+                                 static_cast<float>((in[i].y() - cy) * scale),
+                                 static_cast<float>((in[i].z() - cz) * scale));
     return true;
 }
 
@@ -287,23 +301,101 @@ inline bool triangle_pcl(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
     return true;
 }
 
-/// One triple, the same quantities computed directly (cosines without normalising vectors,
-/// angle bins from a table). False when it is rejected.
-inline bool triangle_fast(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
-                          const Eigen::Vector3f& p3, const AngleBins& bins, Triangle& t) {
-    const Eigen::Vector3f v21 = p2 - p1, v31 = p3 - p1, v23 = p2 - p3;
-    const float a = v21.norm(), b = v31.norm(), c = v23.norm();
-    const float s = (a + b + c) * 0.5f;
-    const float heron = s * (s - a) * (s - b) * (s - c);
-    if (!(heron > kMinHeronProduct)) return false;
-    const int t1 = bins(std::abs(v21.dot(v31)) / (a * b));
-    const int t2 = bins(std::abs(v23.dot(v31)) / (c * b));
-    const int t3 = bins(std::abs(v23.dot(v21)) / (c * a));
+/// The per-triple quantities of the fast sampler before binning, in the exact float operations
+/// that both the scalar and the SIMD path perform (no fused multiply-add), so that both accept
+/// the same triples and give the same values.
+struct TripleGeometry {
+    float a, b, c;           // |p1p2|, |p1p3|, |p2p3|
+    float cos1, cos2, cos3;  // |cos| at p1, p3, p2
+    float heron;             // s(s-a)(s-b)(s-c)
+};
+
+inline TripleGeometry triple_geometry(const float* xs, const float* ys, const float* zs,
+                                      std::uint32_t i1, std::uint32_t i2, std::uint32_t i3) {
+    const float x21 = xs[i2] - xs[i1], y21 = ys[i2] - ys[i1], z21 = zs[i2] - zs[i1];
+    const float x31 = xs[i3] - xs[i1], y31 = ys[i3] - ys[i1], z31 = zs[i3] - zs[i1];
+    const float x23 = xs[i2] - xs[i3], y23 = ys[i2] - ys[i3], z23 = zs[i2] - zs[i3];
+    TripleGeometry g;
+    g.a = std::sqrt(x21 * x21 + y21 * y21 + z21 * z21);
+    g.b = std::sqrt(x31 * x31 + y31 * y31 + z31 * z31);
+    g.c = std::sqrt(x23 * x23 + y23 * y23 + z23 * z23);
+    g.cos1 = std::abs(x21 * x31 + y21 * y31 + z21 * z31) / (g.a * g.b);
+    g.cos2 = std::abs(x23 * x31 + y23 * y31 + z23 * z31) / (g.c * g.b);
+    g.cos3 = std::abs(x23 * x21 + y23 * y21 + z23 * z21) / (g.c * g.a);
+    const float s = (g.a + g.b + g.c) * 0.5f;
+    g.heron = s * (s - g.a) * (s - g.b) * (s - g.c);
+    return g;
+}
+
+#define ESF_TARGET_AVX2 __attribute__((target("avx2")))
+
+ESF_TARGET_AVX2 inline __m256 dot_x8(__m256 ax, __m256 ay, __m256 az, __m256 bx, __m256 by,
+                                     __m256 bz) {
+    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)),
+                         _mm256_mul_ps(az, bz));
+}
+
+/// Eight triples at once (AVX2): the same operations as triple_geometry, lane by lane.
+ESF_TARGET_AVX2 void triple_geometry_x8(const float* xs, const float* ys, const float* zs,
+                                        const std::uint32_t* i1, const std::uint32_t* i2,
+                                        const std::uint32_t* i3, TripleGeometry* out) {
+    const __m256i j1 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i1));
+    const __m256i j2 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i2));
+    const __m256i j3 = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(i3));
+    const __m256 x1 = _mm256_i32gather_ps(xs, j1, 4), y1 = _mm256_i32gather_ps(ys, j1, 4),
+                 z1 = _mm256_i32gather_ps(zs, j1, 4);
+    const __m256 x2 = _mm256_i32gather_ps(xs, j2, 4), y2 = _mm256_i32gather_ps(ys, j2, 4),
+                 z2 = _mm256_i32gather_ps(zs, j2, 4);
+    const __m256 x3 = _mm256_i32gather_ps(xs, j3, 4), y3 = _mm256_i32gather_ps(ys, j3, 4),
+                 z3 = _mm256_i32gather_ps(zs, j3, 4);
+    const __m256 x21 = _mm256_sub_ps(x2, x1), y21 = _mm256_sub_ps(y2, y1),
+                 z21 = _mm256_sub_ps(z2, z1);
+    const __m256 x31 = _mm256_sub_ps(x3, x1), y31 = _mm256_sub_ps(y3, y1),
+                 z31 = _mm256_sub_ps(z3, z1);
+    const __m256 x23 = _mm256_sub_ps(x2, x3), y23 = _mm256_sub_ps(y2, y3),
+                 z23 = _mm256_sub_ps(z2, z3);
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    const __m256 a = _mm256_sqrt_ps(dot_x8(x21, y21, z21, x21, y21, z21));
+    const __m256 b = _mm256_sqrt_ps(dot_x8(x31, y31, z31, x31, y31, z31));
+    const __m256 c = _mm256_sqrt_ps(dot_x8(x23, y23, z23, x23, y23, z23));
+    const __m256 cos1 = _mm256_div_ps(_mm256_andnot_ps(sign, dot_x8(x21, y21, z21, x31, y31, z31)),
+                                      _mm256_mul_ps(a, b));
+    const __m256 cos2 = _mm256_div_ps(_mm256_andnot_ps(sign, dot_x8(x23, y23, z23, x31, y31, z31)),
+                                      _mm256_mul_ps(c, b));
+    const __m256 cos3 = _mm256_div_ps(_mm256_andnot_ps(sign, dot_x8(x23, y23, z23, x21, y21, z21)),
+                                      _mm256_mul_ps(c, a));
+    const __m256 s = _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(a, b), c), _mm256_set1_ps(0.5f));
+    const __m256 heron =
+        _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(s, _mm256_sub_ps(s, a)), _mm256_sub_ps(s, b)),
+                      _mm256_sub_ps(s, c));
+    alignas(32) float lanes[7][8];
+    _mm256_store_ps(lanes[0], a);
+    _mm256_store_ps(lanes[1], b);
+    _mm256_store_ps(lanes[2], c);
+    _mm256_store_ps(lanes[3], cos1);
+    _mm256_store_ps(lanes[4], cos2);
+    _mm256_store_ps(lanes[5], cos3);
+    _mm256_store_ps(lanes[6], heron);
+    for (int k = 0; k < 8; ++k)
+        out[k] = {lanes[0][k], lanes[1][k], lanes[2][k], lanes[3][k],
+                  lanes[4][k], lanes[5][k], lanes[6][k]};
+}
+
+bool cpu_has_avx2() {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2");
+}
+
+/// Bins a triple of the fast sampler. False when it is rejected (degenerate, or an angle bin
+/// outside [0, 63]).
+inline bool triangle_fast(const TripleGeometry& g, const AngleBins& bins, Triangle& t) {
+    if (!(g.heron > kMinHeronProduct)) return false;
+    const int t1 = bins(g.cos1), t2 = bins(g.cos2), t3 = bins(g.cos3);
     if ((t1 | t2 | t3) >= kEsfBins) return false;
     t.angle_bin = {static_cast<std::uint8_t>(t1), static_cast<std::uint8_t>(t2),
                    static_cast<std::uint8_t>(t3)};
-    t.d2 = {a, b, c};
-    t.d3 = std::sqrt(std::sqrt(heron));
+    t.d2 = {g.a, g.b, g.c};
+    t.d3 = std::sqrt(std::sqrt(g.heron));
     return true;
 }
 
@@ -311,14 +403,29 @@ inline bool triangle_fast(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
 /// shorter than 1e-5 of the first. Heron's formula in float does not reject such triples (its
 /// cancellation error exceeds the area threshold), so they are caught here.
 bool collinear(std::span<const Eigen::Vector3f> points) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& p : points) mean += p.cast<double>();
-    mean /= static_cast<double>(points.size());
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    // Scalar accumulators (an Eigen matrix accumulator goes through memory on every point).
+    double mx = 0.0, my = 0.0, mz = 0.0;
     for (const auto& p : points) {
-        const Eigen::Vector3d q = p.cast<double>() - mean;
-        covariance += q * q.transpose();
+        mx += p.x();
+        my += p.y();
+        mz += p.z();
     }
+    const double count = static_cast<double>(points.size());
+    mx /= count;
+    my /= count;
+    mz /= count;
+    double xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0, zz = 0.0;
+    for (const auto& p : points) {
+        const double x = p.x() - mx, y = p.y() - my, z = p.z() - mz;
+        xx += x * x;
+        xy += x * y;
+        xz += x * z;
+        yy += y * y;
+        yz += y * z;
+        zz += z * z;
+    }
+    Eigen::Matrix3d covariance;
+    covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
     const Eigen::Vector3d eigenvalues =
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
             .eigenvalues();  // ascending
@@ -411,17 +518,40 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         const AngleBins& bins = angle_bins();
         Xoshiro256 random(opt.seed);
         const auto count = static_cast<std::uint32_t>(n);
+        ws.xs.resize(n);
+        ws.ys.resize(n);
+        ws.zs.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            ws.xs[i] = ws.scaled[i].x();
+            ws.ys[i] = ws.scaled[i].y();
+            ws.zs[i] = ws.scaled[i].z();
+        }
+        static const bool avx2 = cpu_has_avx2();  // CPU features do not change while running
+        // Attempts are drawn eight at a time and consumed in order; draws past the last accepted
+        // triple are discarded, so the result is that of drawing one attempt at a time.
+        constexpr int kBatch = 8;
+        std::uint32_t i1[kBatch], i2[kBatch], i3[kBatch];
+        TripleGeometry geometry[kBatch];
         while (accepted < samples) {
-            if (++attempts > max_attempts) throw_degenerate(n, accepted, max_attempts);
-            const std::uint64_t r1 = random(), r2 = random();
-            const std::uint32_t i1 = bounded(static_cast<std::uint32_t>(r1 >> 32), count);
-            const std::uint32_t i2 = bounded(static_cast<std::uint32_t>(r1), count);
-            const std::uint32_t i3 = bounded(static_cast<std::uint32_t>(r2 >> 32), count);
-            if (i1 == i2 || i1 == i3 || i2 == i3) continue;
-            if (!triangle_fast(ws.scaled[i1], ws.scaled[i2], ws.scaled[i3], bins,
-                               ws.triangles[accepted]))
-                continue;
-            record(i1, i2, i3);
+            for (int k = 0; k < kBatch; ++k) {
+                const std::uint64_t r1 = random(), r2 = random();
+                i1[k] = bounded(static_cast<std::uint32_t>(r1 >> 32), count);
+                i2[k] = bounded(static_cast<std::uint32_t>(r1), count);
+                i3[k] = bounded(static_cast<std::uint32_t>(r2 >> 32), count);
+            }
+            if (avx2) {
+                triple_geometry_x8(ws.xs.data(), ws.ys.data(), ws.zs.data(), i1, i2, i3, geometry);
+            } else {
+                for (int k = 0; k < kBatch; ++k)
+                    geometry[k] = triple_geometry(ws.xs.data(), ws.ys.data(), ws.zs.data(), i1[k],
+                                                  i2[k], i3[k]);
+            }
+            for (int k = 0; k < kBatch && accepted < samples; ++k) {
+                if (++attempts > max_attempts) throw_degenerate(n, accepted, max_attempts);
+                if (i1[k] == i2[k] || i1[k] == i3[k] || i2[k] == i3[k]) continue;
+                if (!triangle_fast(geometry[k], bins, ws.triangles[accepted])) continue;
+                record(i1[k], i2[k], i3[k]);
+            }
         }
     }
     result.attempts = attempts;
@@ -445,7 +575,10 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         kD2Mixed,
         kRatio
     };
-    std::uint32_t h[kEsfBlocks][kEsfBins] = {};
+    // Four interleaved copies of the histograms (triangle t counts into copy t % 4), summed at
+    // the end: consecutive increments of one bin then do not wait on each other's stores.
+    constexpr std::size_t kCopies = 4;
+    std::uint32_t copies[kCopies][kEsfBlocks][kEsfBins] = {};
     float maxd2 = 0.0f, maxd3 = 0.0f;
     for (const Triangle& tri : ws.triangles) {
         maxd2 = std::max({maxd2, tri.d2[0], tri.d2[1], tri.d2[2]});
@@ -465,6 +598,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     };
     const RatioBins& ratio_bins = ratio_bin_table();
     for (std::size_t t = 0; t < samples; ++t) {
+        auto& h = copies[t % kCopies];
         const Triangle& tri = ws.triangles[t];
         const std::uint16_t* o = &ws.occupied[3 * t];
         const std::uint8_t* v = &ws.visited[3 * t];
@@ -489,6 +623,13 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         a3[tri.angle_bin[2]] += v[1];
         h[kD3In + cls][d3_bin(tri.d3)]++;
     }
+    std::uint32_t h[kEsfBlocks][kEsfBins];
+    for (int b = 0; b < kEsfBlocks; ++b)
+        for (int i = 0; i < kEsfBins; ++i) {
+            std::uint32_t total = 0;
+            for (const auto& copy : copies) total += copy[b][i];
+            h[b][i] = total;
+        }
 
     // Block weights of the reference, then L1 normalisation (float, in output order).
     static constexpr float kWeights[kEsfBlocks] = {0.5f, 0.5f, 0.5f, 0.5f, 0.5f,

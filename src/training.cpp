@@ -133,10 +133,13 @@ void validate(const TrainingOptions& options) {
         throw std::invalid_argument("min_points must be >= 3 (ESF needs a triangle), got " +
                                     std::to_string(options.min_points));
     resolve_threads(options.threads);
-    if (options.descriptor == "esf")
-        EsfEstimator check(options.esf);  // throws std::invalid_argument for bad ESF options
-    else  // throws for an unknown name (listing the valid ones) or options out of range
+    // Both throw std::invalid_argument: bad ESF options; an unknown descriptor (the message
+    // lists the valid names) or baseline options out of range.
+    if (options.descriptor == "esf") {
+        EsfEstimator check(options.esf);
+    } else {
         make_descriptor(options.descriptor, options.descriptor_options);
+    }
     // The renderer checks its options (level, camera, noise, fill, scale) when built: build one
     // for a tetrahedron so that bad options fail now, not as a failure of every model.
     Mesh tetrahedron;
@@ -226,6 +229,20 @@ void prepare_job(Job& job, const TrainingOptions& options) {
                 throw std::invalid_argument(job.file->path + ": mesh has no extent to rescale");
             render.scale = job.target_extent / extent;
             render.target_extent.reset();
+        }
+        if (render.distance) {
+            // Stand back from a model too large to be seen whole from the given distance.
+            const Eigen::Vector3f lo = mesh.min_corner(), hi = mesh.max_corner();
+            const double extent = static_cast<double>((hi - lo).maxCoeff());
+            const double scale =
+                render.target_extent ? *render.target_extent / extent : render.scale;
+            const Eigen::Vector3d centre = (lo + hi).cast<double>() / 2.0;
+            double radius = 0.0;
+            for (const auto& v : mesh.vertices)
+                radius = std::max(radius, (v.cast<double>() - centre).norm());
+            radius *= scale;
+            if (*render.distance < kTrainingMinDistanceFactor * radius)
+                render.distance = kTrainingMinDistanceFactor * radius;
         }
         job.renderer = std::make_unique<MeshRenderer>(mesh, render);
         job.entry.scale = job.renderer->scale();

@@ -113,6 +113,7 @@ TrainingOptions fast_options() {
     o.render.camera.fx = o.render.camera.fy = 131.25;
     o.render.camera.cx = 79.5;
     o.render.camera.cy = 59.5;
+    o.render.distance.reset();  // the small camera sees the small test shapes at fill 0.5
     o.esf.samples = 2000;
     o.seed = 7;
     o.threads = 2;
@@ -776,6 +777,25 @@ TEST_F(TrainingRunTest, KilledProcessResumesToTheSameDatabase) {
     const TrainingResult r = train(root(), db, fast_options());
     EXPECT_GE(r.models_existing, 1u);
     expect_same(snapshot(full), snapshot(db));
+}
+
+TEST_F(TrainingRunTest, ViewsAreTakenFromTheCameraDistanceOrFarEnoughToSeeTheModel) {
+    EXPECT_EQ(TrainingOptions{}.render.distance, kTrainingCameraDistance);  // the default
+    TrainingOptions o = fast_options();
+    o.render.distance = 0.12;  // metres from each model's centre
+    Database db(path("db.sqlite"), OpenMode::kWrite);
+    const TrainingResult r = train(root(), db, o);
+    ASSERT_EQ(r.models_failed, 0u);
+    const auto camera_distance = [&](const std::string& category, const std::string& name) {
+        const auto views = db.views(category, name);
+        EXPECT_EQ(views.size(), 20u);
+        // Every model is centred on its origin, which each camera looks at from its distance.
+        return views.at(7).pose.block<3, 1>(0, 3).norm();
+    };
+    // The sphere (radius 0.05) fits: seen from 0.12 m. The cube's bounding sphere (radius
+    // 0.05 sqrt 3 = 0.0866) would not fit: seen from 1.5 times that radius, 0.1299 m.
+    EXPECT_NEAR(camera_distance("ball", "sphere"), 0.12, 1e-5);
+    EXPECT_NEAR(camera_distance("box", "cube"), 1.5 * 0.05 * std::sqrt(3.0), 1e-4);
 }
 
 }  // namespace

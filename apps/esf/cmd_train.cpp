@@ -30,6 +30,7 @@ struct TrainArgs {
     std::string noise = "kinect";
     std::string camera = "kinect";
     double fill = 0.5;
+    double distance = kTrainingCameraDistance;
     std::size_t min_points = 50;
     std::string catalog;
     bool no_catalog = false;
@@ -47,6 +48,10 @@ void run_train(const TrainArgs& args) {
     options.render.camera =
         args.camera == "pcl" ? CameraIntrinsics::pcl_renderer() : CameraIntrinsics::kinect();
     options.render.fill_fraction = args.fill;
+    if (args.distance > 0.0)
+        options.render.distance = args.distance;
+    else
+        options.render.distance.reset();
     options.descriptor = args.descriptor;
     options.esf.samples = args.samples;
     options.descriptor_options.samples = args.samples;
@@ -150,7 +155,14 @@ void add_train_command(CLI::App& app) {
                     "Camera: kinect (640x480, f 525) or pcl (PCL's renderer, 150x150)")
         ->check(CLI::IsMember({"kinect", "pcl"}))
         ->capture_default_str();
-    cmd->add_option("--fill", args->fill, "Fraction of the image side the object spans")
+    cmd->add_option("--distance", args->distance,
+                    "Camera distance from the model's centre, metres (a table-top sensor; models "
+                    "too large for it are seen from 1.5 x their radius); 0: use --fill instead")
+        ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
+    cmd->add_option("--fill", args->fill,
+                    "With --distance 0: fraction of the image side the object spans (PCL's "
+                    "renderer: the object fills its 150x150 image)")
         ->check(CLI::Range(0.01, 1.0))
         ->capture_default_str();
     cmd->add_option("--min-points", args->min_points,

@@ -16,6 +16,9 @@ void add_generate_command(CLI::App& app);
 void add_render_command(CLI::App& app);
 void add_classify_command(CLI::App& app);
 void add_scene_command(CLI::App& app);
+void add_compare_command(CLI::App& app);
+void add_eval_command(CLI::App& app);
+void add_learn_weights_command(CLI::App& app);
 // @commands: one declaration per command above this line
 
 }  // namespace esf::cli

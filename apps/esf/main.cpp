@@ -25,6 +25,9 @@ int main(int argc, char** argv) {
     esf::cli::add_render_command(app);
     esf::cli::add_classify_command(app);
     esf::cli::add_scene_command(app);
+    esf::cli::add_compare_command(app);
+    esf::cli::add_eval_command(app);
+    esf::cli::add_learn_weights_command(app);
     // @commands: one add_<name>_command(app) call per command above this line
     try {
         app.parse(argc, argv);

@@ -8,17 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "esf/camera.hpp"
 #include "esf/point_cloud.hpp"
 
 namespace esf {
 
-/// Pinhole intrinsics in pixels; the defaults are the Kinect v1 (640 x 480) values.
-struct CameraIntrinsics {
-    double fx = 525.0;
-    double fy = 525.0;
-    double cx = 319.5;
-    double cy = 239.5;
-};
+// CameraIntrinsics (pinhole, Kinect v1 defaults) comes from camera.hpp; depth_to_cloud() uses
+// fx, fy, cx, cy and ignores the image size (the image's own).
 
 /// A depth image, row-major from the top-left pixel; depth[v * width + u] is in sensor units.
 struct DepthImage {

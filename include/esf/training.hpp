@@ -87,11 +87,32 @@ struct TrainingProgress {
     std::string model;              ///< "category/name" just finished; empty in the first call
 };
 
+/// Camera distance of training views by default (metres from the model's centre): a depth sensor
+/// looking at a table top from where a robot sees it (Kinect v1 works from 0.5 m; table scenes
+/// are taken at 0.6 to 1.0 m). The point density and the sensor noise of the views then match
+/// what the real sensor gives; an object in the image's middle half, as with PCL's renderer, is
+/// seen from far closer and with little noise (see BENCHMARKS.md for the effect on accuracy).
+inline constexpr double kTrainingCameraDistance = 0.8;
+/// A model whose bounding sphere radius exceeds the camera distance / this factor is seen from
+/// that factor times its radius instead (it would not fit the image otherwise).
+inline constexpr double kTrainingMinDistanceFactor = 1.5;
+
+/// The render options training uses by default: RenderOptions with the camera at
+/// kTrainingCameraDistance.
+inline RenderOptions default_training_render() {
+    RenderOptions render;
+    render.distance = kTrainingCameraDistance;
+    return render;
+}
+
 struct TrainingOptions {
     /// View sphere, camera and sensor. render.seed is ignored (see model_seed), render.threads
     /// too (see `threads`); render.scale / target_extent apply to every model except the
-    /// non-metric ones of a catalog, which get typical_extent() of their category.
-    RenderOptions render;
+    /// non-metric ones of a catalog, which get typical_extent() of their category. With
+    /// render.distance set, a model larger than render.distance / kTrainingMinDistanceFactor
+    /// is seen from kTrainingMinDistanceFactor times its bounding sphere radius; without it,
+    /// the distance follows render.fill_fraction.
+    RenderOptions render = default_training_render();
     /// The descriptor stored: "esf" (our estimator with `esf`) or any other name of
     /// descriptor_names() (make_descriptor() with `descriptor_options`).
     std::string descriptor = "esf";

@@ -1,0 +1,58 @@
+#pragma once
+// Shared by esf eval and esf learn-weights: a database's descriptors for leave-one-model-out
+// runs, its stored weights and the model groups of a catalog.
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "esf/database.hpp"
+#include "esf/esf_descriptor.hpp"
+#include "esf/evaluation.hpp"
+#include "esf/knn_index.hpp"
+#include "esf/training.hpp"
+
+namespace esf::cli {
+
+/// Descriptors that take learned block weights (as Recognizer applies them).
+inline bool block_weighted(const std::string& descriptor) {
+    return descriptor == "esf" || descriptor == "pcl-esf";
+}
+
+/// Per-dimension weights from a database's stored weights of `matrix.kind` (empty: none, or not
+/// a block-weighted descriptor).
+inline std::vector<float> stored_dimension_weights(const Database& db,
+                                                   const DescriptorMatrix& matrix) {
+    if (!block_weighted(matrix.kind.name)) return {};
+    const std::optional<std::vector<float>> w = db.weights(matrix.kind.name);
+    if (!w) return {};
+    if (w->size() == static_cast<std::size_t>(kEsfBlocks))
+        return expand_block_weights(*w, static_cast<std::size_t>(kEsfBins));
+    return *w;
+}
+
+/// Groups per model: from a catalog CSV when `catalog` is non-empty, else empty (one per model).
+inline std::vector<std::string> cli_model_groups(const DescriptorMatrix& matrix,
+                                                 const std::string& catalog) {
+    if (catalog.empty()) return {};
+    return model_groups(matrix, read_catalog(catalog));
+}
+
+/// Views of a matrix (consecutive rows of one model and view index are one view).
+inline std::size_t view_count(const DescriptorMatrix& matrix) {
+    std::size_t views = 0;
+    for (std::size_t r = 0; r < matrix.rows(); ++r)
+        views += r == 0 || matrix.row_info[r - 1].model != matrix.row_info[r].model ||
+                 matrix.row_info[r - 1].view_index != matrix.row_info[r].view_index;
+    return views;
+}
+
+/// "12.3" for a fraction 0.123.
+inline std::string percent_text(double fraction) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.1f", 100.0 * fraction);
+    return buffer;
+}
+
+}  // namespace esf::cli

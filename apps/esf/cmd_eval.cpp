@@ -1,0 +1,209 @@
+// esf eval DB TESTSET.csv | esf eval --synthetic DB : 1-NN and k-NN accuracy per sample and per
+// class, the most confused class (the paper's Table I), and an optional report folder.
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "cli_common.hpp"
+#include "cli_evaluate.hpp"
+#include "cli_recognize.hpp"
+#include "commands.hpp"
+#include "esf/evaluation.hpp"
+#include "esf/recognizer.hpp"
+#include "esf/report.hpp"
+
+namespace esf::cli {
+
+namespace {
+
+struct EvalArgs {
+    std::string database;
+    std::string test_set;
+    std::size_t k = 10;
+    std::string descriptor;
+    bool no_weights = false;
+    int threads = 0;
+    bool synthetic = false;
+    std::string groups;
+    std::size_t max_queries = 0;
+    std::string report;
+    std::string title;
+    bool json = false;
+};
+
+void print_table(const EvaluationReport& r) {
+    const std::string k = std::to_string(r.k) + "-NN";
+    std::printf(
+        "%s", (r.mode == "synthetic" ? "synthetic views, " + r.test_set : "test set " + r.test_set)
+                  .c_str());
+    std::printf(" (%s%s): %zu samples", r.descriptor.c_str(), r.weighted ? ", learned weights" : "",
+                r.samples);
+    if (r.skipped) {
+        std::printf(", %zu skipped (not in the database:", r.skipped);
+        for (const SkippedClass& s : r.missing_classes)
+            std::printf(" %s %zu", s.class_name.c_str(), s.samples);
+        std::printf(")");
+    }
+    if (r.failed) std::printf(", %zu failed", r.failed);
+    std::printf("\n\n");
+    std::printf("%-12s %7s %7s\n", "overall", "1-NN", k.c_str());
+    std::printf("%-12s %6s%% %6s%%\n", "per sample", percent_text(r.top1).c_str(),
+                percent_text(r.topk).c_str());
+    std::printf("%-12s %6s%% %6s%%\n\n", "per class", percent_text(r.class_top1).c_str(),
+                percent_text(r.class_topk).c_str());
+    int width = 5;
+    for (const ClassMetrics& c : r.classes)
+        width = std::max(width, static_cast<int>(c.class_name.size()));
+    std::printf("%-*s %7s %7s %7s  %s\n", width, "class", "samples", "1-NN", k.c_str(),
+                "most confused with");
+    for (const ClassMetrics& c : r.classes) {
+        const std::string confused =
+            c.confused_with.empty()
+                ? "-"
+                : c.confused_with + " (" + std::to_string(c.confused_count) + ")";
+        std::printf("%-*s %7zu %6s%% %6s%%  %s\n", width, c.class_name.c_str(), c.samples,
+                    percent_text(c.top1).c_str(), percent_text(c.topk).c_str(), confused.c_str());
+    }
+    std::printf("\n");
+    if (r.describe_ms > 0.0) std::printf("describe %.2f ms per cloud, ", r.describe_ms);
+    std::printf("match %.3f ms per query, %.2f s in all on %d threads\n", r.match_ms,
+                r.total_seconds, r.threads);
+}
+
+void run_eval(const EvalArgs& args) {
+    if (!args.synthetic && args.test_set.empty())
+        throw CLI::ValidationError("eval", "a TESTSET.csv is needed (or --synthetic)");
+    if (args.synthetic && !args.test_set.empty())
+        throw CLI::ValidationError("eval", "--synthetic takes no TESTSET.csv");
+    if (!args.synthetic && !args.groups.empty())
+        throw CLI::ValidationError("--groups", "--groups needs --synthetic");
+    if (!args.synthetic && args.max_queries)
+        throw CLI::ValidationError("--max-queries", "--max-queries needs --synthetic");
+
+    EvaluationReport report;
+    if (args.synthetic) {
+        const Database db(args.database, OpenMode::kRead);
+        const DescriptorMatrix matrix = db.load_descriptors(args.descriptor);
+        SyntheticOptions options;
+        options.k = args.k;
+        options.threads = args.threads;
+        options.max_queries = args.max_queries;
+        options.groups = cli_model_groups(matrix, args.groups);
+        if (!args.no_weights) options.weights = stored_dimension_weights(db, matrix);
+        const std::size_t views = view_count(matrix);
+        Progress progress("eval",
+                          options.max_queries ? std::min(views, options.max_queries) : views);
+        options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
+        report = evaluate_synthetic(matrix, options);
+        progress.finish();
+        report.database = args.database;
+    } else {
+        const TestSet set = read_test_set(args.test_set);
+        RecognizerOptions recognizer_options;
+        recognizer_options.k = args.k;
+        recognizer_options.descriptor = args.descriptor;
+        recognizer_options.use_weights = !args.no_weights;
+        recognizer_options.threads = args.threads;
+        const Recognizer recognizer(args.database, recognizer_options);
+        EvaluationOptions options;
+        options.k = args.k;
+        options.threads = args.threads;
+        const std::vector<std::string>& categories = recognizer.info().categories;
+        const auto evaluated = static_cast<std::size_t>(
+            std::count_if(set.samples.begin(), set.samples.end(), [&](const TestSample& t) {
+                return std::find(categories.begin(), categories.end(), t.class_name) !=
+                       categories.end();
+            }));
+        Progress progress("eval", evaluated);
+        options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
+        report = evaluate_test_set(recognizer, set, options);
+        progress.finish();
+        for (const QueryFailure& f : report.failures)
+            std::fprintf(stderr, "esf: warning: %s\n", with_file(f.file, f.error).c_str());
+    }
+
+    if (!args.report.empty()) {
+        ReportOptions options;
+        options.title = args.title.empty() ? "esf eval: " + args.database : args.title;
+        const ReportFiles files = write_report(args.report, report, options);
+        if (!args.json) std::printf("report: %s\n", files.html.c_str());
+    }
+    if (args.json) {
+        ReportOptions options;
+        options.include_queries = false;
+        options.title = args.title;
+        std::cout << report_json(report, options);
+    } else {
+        if (!args.report.empty()) std::printf("\n");
+        print_table(report);
+    }
+    std::cout.flush();
+    if (!std::cout) throw std::runtime_error("writing the output failed");
+    if (report.samples == 0)
+        throw std::invalid_argument("no sample could be evaluated (" +
+                                    std::to_string(report.skipped) + " skipped, " +
+                                    std::to_string(report.failed) + " failed)");
+}
+
+}  // namespace
+
+void add_eval_command(CLI::App& app) {
+    auto args = std::make_shared<EvalArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "eval",
+        "Measure classification accuracy (Wohlkinger & Vincze 2011, Table I).\n"
+        "  esf eval DB TESTSET.csv     labelled real clouds: a CSV with a header naming at least\n"
+        "                              the columns file and class (paths relative to the CSV)\n"
+        "  esf eval --synthetic DB     the database's own views, leave-one-model-out: each\n"
+        "                              model's views against all other models' views (with\n"
+        "                              --groups, all models of the same group are left out)\n"
+        "Each cloud is described with the database's descriptor and settings and its k nearest\n"
+        "views are found (L1, with the learned weights when stored). 1-NN: the nearest view has\n"
+        "the true class; k-NN: the true class is among the k nearest views' classes. Printed per\n"
+        "sample and per class (the mean of the class accuracies), then per class with the most\n"
+        "confused class. Rows whose class is not in the database are skipped and counted; clouds\n"
+        "that cannot be read or described are reported on stderr and counted as failed.\n"
+        "--json prints one object: {overall: {samples, top1, top10, class_top1, class_top10,\n"
+        "rank_curve, ...}, classes: [{class, samples, top1, top10, confused_with, ...}],\n"
+        "confusion, skipped, missing_classes, failed, failures, timings}, fractions in [0, 1];\n"
+        "top10 and class_top10 hold the top-k values for any -k. --report DIR writes\n"
+        "report.json, confusion.png/.svg, rank_curves.svg and a self-contained index.html.\n"
+        "Exit status 2 when no sample could be evaluated.");
+    cmd->add_option("database", args->database, "Training database (esf train ... -o DB)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("testset", args->test_set,
+                    "Test set CSV with file and class columns (not with --synthetic)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("-k", args->k, "Nearest views per query for the k-NN accuracy and rank curve")
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
+    cmd->add_option("--descriptor", args->descriptor,
+                    "Descriptor kind to evaluate when the database holds several");
+    cmd->add_flag("--no-weights", args->no_weights,
+                  "Ignore the database's learned sub-histogram weights (plain L1)");
+    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_flag("--synthetic", args->synthetic,
+                  "Leave-one-model-out over the database's own views instead of a test set");
+    cmd->add_option("--groups", args->groups,
+                    "With --synthetic: catalog CSV (file, group columns); all views of a query's "
+                    "group are left out")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--max-queries", args->max_queries,
+                    "With --synthetic: query at most N evenly spaced views (0 = all)")
+        ->capture_default_str();
+    cmd->add_option("--report", args->report,
+                    "Write report.json, confusion.png/.svg, rank_curves.svg, index.html to DIR");
+    cmd->add_option("--title", args->title, "Title of the report (default: esf eval: DB)");
+    cmd->add_flag("--json", args->json, "Print one JSON object instead of the tables");
+    cmd->callback([args] { run_eval(*args); });
+}
+
+}  // namespace esf::cli
