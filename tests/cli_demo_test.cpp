@@ -12,24 +12,14 @@
 #include <sstream>
 #include <string>
 
+#include "cli_run.hpp"
+
 namespace fs = std::filesystem;
+using esf::test::CliRun;
+using esf::test::quoted;
+using esf::test::read_text;
 
 namespace {
-
-struct CliRun {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
 // A small demo: 1 training model per category from 20 views, 1 held-out model x 3 views, a
 // scene of 4 objects.
@@ -47,17 +37,7 @@ class CliDemoTest : public ::testing::Test {
     }
     void TearDown() override { fs::remove_all(dir_); }
 
-    CliRun esf(const std::string& args) const {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string command = quoted(ESF_CLI) + " " + args + " >" + quoted(out.string()) +
-                                    " 2>" + quoted(err.string());
-        const int status = std::system(command.c_str());
-        CliRun run;
-        run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        run.out = read_text(out);
-        run.err = read_text(err);
-        return run;
-    }
+    CliRun esf(const std::string& args) const { return esf::test::run_esf(args, dir_); }
 
     fs::path dir_;
 };

@@ -15,29 +15,14 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.hpp"
+
 namespace fs = std::filesystem;
+using esf::test::CliRun;
+using esf::test::quoted;
+using esf::test::read_text;
 
 namespace {
-
-struct CliRun {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string quoted(const fs::path& p) {
-    std::string s(1, '\'');
-    s += p.string();
-    s += '\'';
-    return s;
-}
 
 std::size_t lines(const std::string& s) {
     std::size_t n = 0;
@@ -53,17 +38,7 @@ class CliEvalTest : public ::testing::Test {
         return fs::temp_directory_path() / ("esf_cli_eval_" + std::to_string(::getpid()));
     }
 
-    static CliRun esf(const std::string& args) {
-        const fs::path out = dir() / "stdout.txt", err = dir() / "stderr.txt";
-        const std::string command =
-            "'" ESF_CLI "' " + args + " >" + quoted(out) + " 2>" + quoted(err);
-        const int status = std::system(command.c_str());
-        CliRun run;
-        run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        run.out = read_text(out);
-        run.err = read_text(err);
-        return run;
-    }
+    static CliRun esf(const std::string& args) { return esf::test::run_esf(args, dir()); }
 
     // One database and test set for all tests: 2 generated models per class, 20 views each;
     // queries are views of a model generated with another seed.

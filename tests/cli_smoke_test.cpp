@@ -15,28 +15,17 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/database.hpp"
 #include "esf/esf_descriptor.hpp"
 
 namespace fs = std::filesystem;
+using esf::test::CliRun;
+using esf::test::quoted;
+using esf::test::read_text;
 
 namespace {
-
-struct CliRun {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
 class CliSmokeTest : public ::testing::Test {
   protected:
@@ -49,17 +38,7 @@ class CliSmokeTest : public ::testing::Test {
     }
     void TearDown() override { fs::remove_all(dir_); }
 
-    CliRun esf(const std::string& args) const {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string command = quoted(ESF_CLI) + " " + args + " >" + quoted(out.string()) +
-                                    " 2>" + quoted(err.string());
-        const int status = std::system(command.c_str());
-        CliRun run;
-        run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        run.out = read_text(out);
-        run.err = read_text(err);
-        return run;
-    }
+    CliRun esf(const std::string& args) const { return esf::test::run_esf(args, dir_); }
 
     /// A closed box surface, 6 cm x 4 cm x 10 cm, 1 mm grid, as x y z text.
     std::string write_box(const std::string& name) const {
