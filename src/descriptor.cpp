@@ -65,42 +65,23 @@ bool normalise_signature(Signature& signature) {
 
 namespace {
 
-/// EsfEstimators for concurrent callers: a call borrows a free one (or makes one) and returns
-/// it, so workspaces are reused (their set-up is about a quarter of the time on a 15k-point
-/// cloud) but never shared. The output does not depend on which estimator computes it.
+/// An EsfEstimatorPool whose errors name the descriptor ("<name>: " in front). The estimator
+/// drops non-finite points itself and rejects what describable_points() rejects, in the same
+/// words.
 class EstimatorPool {
   public:
-    explicit EstimatorPool(const EsfOptions& options) : options_(options) {
-        free_.push_back(std::make_unique<EsfEstimator>(options_));  // validates the options
-    }
+    explicit EstimatorPool(const EsfOptions& options) : pool_(options) {}
 
-    /// The estimator drops non-finite points itself and rejects what describable_points()
-    /// rejects, in the same words; "<name>: " goes in front.
     EsfResult compute(std::span<const Eigen::Vector3f> points, const std::string& name) const {
-        std::unique_ptr<EsfEstimator> estimator;
-        {
-            const std::lock_guard<std::mutex> lock(mutex_);
-            if (!free_.empty()) {
-                estimator = std::move(free_.back());
-                free_.pop_back();
-            }
-        }
-        if (!estimator) estimator = std::make_unique<EsfEstimator>(options_);
-        EsfResult result;
         try {
-            result = estimator->compute(points);
+            return pool_.compute(points);
         } catch (const std::invalid_argument& e) {
             throw std::invalid_argument(name + ": " + e.what());
         }
-        const std::lock_guard<std::mutex> lock(mutex_);
-        free_.push_back(std::move(estimator));
-        return result;
     }
 
   private:
-    EsfOptions options_;
-    mutable std::mutex mutex_;
-    mutable std::vector<std::unique_ptr<EsfEstimator>> free_;
+    EsfEstimatorPool pool_;
 };
 
 EsfOptions fast_esf_options(const DescriptorOptions& options) {

@@ -647,6 +647,33 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     return result;
 }
 
+EsfEstimatorPool::EsfEstimatorPool(const EsfOptions& options) : options_(options) {
+    free_.push_back(std::make_unique<EsfEstimator>(options_));  // validates the options
+}
+
+EsfEstimatorPool::~EsfEstimatorPool() = default;
+
+EsfResult EsfEstimatorPool::compute(std::span<const Eigen::Vector3f> points) const {
+    std::unique_ptr<EsfEstimator> estimator;
+    {
+        const std::lock_guard<std::mutex> lock(mutex_);
+        if (!free_.empty()) {
+            estimator = std::move(free_.back());
+            free_.pop_back();
+        }
+    }
+    if (!estimator) estimator = std::make_unique<EsfEstimator>(options_);
+    struct GiveBack {  // also when compute() throws
+        const EsfEstimatorPool& pool;
+        std::unique_ptr<EsfEstimator>& estimator;
+        ~GiveBack() {
+            const std::lock_guard<std::mutex> lock(pool.mutex_);
+            pool.free_.push_back(std::move(estimator));
+        }
+    } give_back{*this, estimator};
+    return estimator->compute(points);
+}
+
 EsfResult compute_esf(std::span<const Eigen::Vector3f> points, const EsfOptions& options) {
     return EsfEstimator(options).compute(points);
 }

@@ -93,47 +93,26 @@ class Describer {
     virtual std::vector<float> describe(std::span<const Eigen::Vector3f> points) const = 0;
 };
 
-/// Our ESF with the database's options. Estimators keep a workspace worth reusing; a call
-/// borrows a free one (or makes one) and gives it back, so none is ever shared.
+/// Our ESF with the database's options (estimators reused across calls, never shared).
 class EsfDescriber final : public Describer {
   public:
-    explicit EsfDescriber(const EsfOptions& options) : options_(options) {
-        free_.push_back(std::make_unique<EsfEstimator>(options_));
-    }
+    explicit EsfDescriber(const EsfOptions& options) : pool_(options) {}
 
     std::vector<float> describe(std::span<const Eigen::Vector3f> points) const override {
-        std::unique_ptr<EsfEstimator> estimator;
-        {
-            const std::lock_guard<std::mutex> lock(mutex_);
-            if (!free_.empty()) {
-                estimator = std::move(free_.back());
-                free_.pop_back();
-            }
-        }
-        if (!estimator) estimator = std::make_unique<EsfEstimator>(options_);
         EsfResult result;
         try {
-            result = estimator->compute(points);
+            result = pool_.compute(points);
         } catch (const std::invalid_argument& e) {
-            give_back(std::move(estimator));
             // "ESF needs ..." -> "esf: needs ...", the form of the other descriptors' errors.
             std::string what = e.what();
             if (what.rfind("ESF ", 0) == 0) what.erase(0, 4);
             throw std::invalid_argument("esf: " + what);
         }
-        give_back(std::move(estimator));
         return {result.descriptor.begin(), result.descriptor.end()};
     }
 
   private:
-    void give_back(std::unique_ptr<EsfEstimator> estimator) const {
-        const std::lock_guard<std::mutex> lock(mutex_);
-        free_.push_back(std::move(estimator));
-    }
-
-    EsfOptions options_;
-    mutable std::mutex mutex_;
-    mutable std::vector<std::unique_ptr<EsfEstimator>> free_;
+    EsfEstimatorPool pool_;
 };
 
 /// Any descriptor of the registry (descriptor.hpp).

@@ -11,6 +11,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <thread>
 
 #include "esf_trace.hpp"
 
@@ -105,6 +106,27 @@ TEST(EsfDescriptor, BatchDoesNotDependOnThreadCount) {
     }
     EXPECT_FALSE(one.back().ok());
     EXPECT_THAT(one.back().error, HasSubstr("at least 3 finite points"));
+}
+
+TEST(EsfDescriptor, PoolGivesTheEstimatorsResultFromConcurrentCallers) {
+    std::vector<esf::Points> clouds;
+    for (std::uint32_t i = 0; i < 8; ++i) clouds.push_back(partial_cylinder(800 + 200 * i, i));
+    esf::EsfOptions options;
+    options.samples = 3000;
+    const esf::EsfEstimatorPool pool(options);
+    std::vector<esf::EsfDescriptor> got(clouds.size());
+    std::vector<std::thread> threads;
+    for (std::size_t t = 0; t < 4; ++t)
+        threads.emplace_back([&, t] {
+            for (std::size_t i = t; i < clouds.size(); i += 4)
+                got[i] = pool.compute(clouds[i]).descriptor;
+        });
+    for (auto& thread : threads) thread.join();
+    for (std::size_t i = 0; i < clouds.size(); ++i)
+        EXPECT_EQ(got[i], esf::compute_esf(clouds[i], options).descriptor) << i;
+    // A failing cloud gives its error and its estimator back: the pool keeps working.
+    EXPECT_THROW(pool.compute(esf::Points(2, Eigen::Vector3f::Zero())), std::invalid_argument);
+    EXPECT_EQ(pool.compute(clouds[0]).descriptor, got[0]);
 }
 
 TEST(EsfDescriptor, InvariantToTranslationAndScale) {

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <string>
 #include <vector>
@@ -82,6 +83,26 @@ class EsfEstimator {
     struct Workspace;
     EsfOptions options_;
     std::unique_ptr<Workspace> workspace_;
+};
+
+/// EsfEstimators for concurrent callers: compute() borrows a free estimator (or makes one) and
+/// gives it back, so workspaces are reused (their set-up is about a quarter of the time on a
+/// 15k-point cloud) but never shared. The output does not depend on which estimator computes it.
+/// Thread safety: compute() may run concurrently from any number of threads.
+class EsfEstimatorPool {
+  public:
+    /// Throws std::invalid_argument for options out of range.
+    explicit EsfEstimatorPool(const EsfOptions& options = {});
+    ~EsfEstimatorPool();
+
+    /// As EsfEstimator::compute().
+    EsfResult compute(std::span<const Eigen::Vector3f> points) const;
+    const EsfOptions& options() const { return options_; }
+
+  private:
+    EsfOptions options_;
+    mutable std::mutex mutex_;
+    mutable std::vector<std::unique_ptr<EsfEstimator>> free_;
 };
 
 /// One-shot convenience: EsfEstimator(options).compute(points).
