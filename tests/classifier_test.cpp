@@ -5,8 +5,10 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "error_of.hpp"
 #include "knn_synthetic.hpp"
 
 namespace {
@@ -181,16 +183,10 @@ TEST(Classifier, BatchMatchesSingleForOneAndTwoThreads) {
     }
 }
 
+/// The message of the std::invalid_argument f() throws.
 template <typename F>
 std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const std::invalid_argument& e) {
-        return e.what();
-    } catch (...) {
-        return "unexpected exception type";
-    }
-    return "no exception";
+    return esf::test::error_of<std::invalid_argument>(std::forward<F>(f));
 }
 
 TEST(ClassifierErrors, BadConstruction) {

@@ -17,6 +17,7 @@
 #include <tuple>
 #include <vector>
 
+#include "error_of.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/error.hpp"
 #include "esf/esf_descriptor.hpp"
@@ -47,15 +48,7 @@ QueryOutcome outcome(const std::string& file, const std::string& true_class,
     return o;
 }
 
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "(no exception)";
-}
+using esf::test::error_of;
 
 // ---- metrics --------------------------------------------------------------------------------
 

@@ -10,8 +10,10 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "error_of.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/esf_descriptor.hpp"
 #include "knn_kernels.hpp"
@@ -508,16 +510,10 @@ TEST(KnnIndex, ExpandBlockWeights) {
     EXPECT_EQ(esf::expand_block_weights(std::vector<float>(10, 1.0f), 64).size(), 640u);
 }
 
+/// The message of the std::invalid_argument f() throws.
 template <typename F>
 std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const std::invalid_argument& e) {
-        return e.what();
-    } catch (...) {
-        return "unexpected exception type";
-    }
-    return "no exception";
+    return esf::test::error_of<std::invalid_argument>(std::forward<F>(f));
 }
 
 TEST(KnnIndexErrors, BadIndexInput) {

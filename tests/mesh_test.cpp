@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "error_of.hpp"
 #include "esf/error.hpp"
 #include "test_data.hpp"
 
@@ -68,15 +69,7 @@ std::multiset<Triangle> triangles_of(std::initializer_list<Triangle> list) {
     return out;
 }
 
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "(no exception)";
-}
+using esf::test::error_of;
 
 TEST_F(MeshTest, ObjQuadIsTriangulatedAndObjectsAreMerged) {
     // A unit quad (one polygon, two triangles after triangulation) and a separate triangle in a

@@ -12,20 +12,13 @@
 #include <string>
 #include <vector>
 
+#include "error_of.hpp"
 #include "esf/view_sphere.hpp"
 #include "test_data.hpp"
 
 namespace {
 
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "(no exception)";
-}
+using esf::test::error_of;
 
 /// Axis-aligned box [-sx/2, sx/2] x [-sy/2, sy/2] x [-sz/2, sz/2] + offset, 12 triangles
 /// counter-clockwise seen from outside (or inside when `inward`).

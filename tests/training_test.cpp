@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "error_of.hpp"
 #include "esf/descriptor.hpp"
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
@@ -50,15 +51,7 @@ class TrainingTest : public ::testing::Test {
     fs::path dir_;
 };
 
-template <class E, class F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const E& e) {
-        return e.what();
-    }
-    return "(no exception of the expected type)";
-}
+using esf::test::error_of;
 
 // ---- procedural meshes ----------------------------------------------------------------------
 

@@ -10,19 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "error_of.hpp"
+
 namespace {
 
 constexpr double kPhi = 1.6180339887498949;
 
-template <typename F>
-std::string error_of(F&& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "(no exception)";
-}
+using esf::test::error_of;
 
 TEST(ViewSphere, CountsPerLevel) {
     EXPECT_EQ(esf::view_count(0), 20u);
