@@ -36,6 +36,7 @@
 
 #include "baseline_descriptors.hpp"
 
+#include <fcntl.h>
 #include <pcl/common/common.h>
 #include <pcl/features/cvfh.h>
 #include <pcl/features/esf.h>
@@ -49,9 +50,14 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <iterator>
 #include <mutex>
 #include <stdexcept>
@@ -316,6 +322,95 @@ class Cvfh final : public PclBaseline {
     }
 };
 
+/// Runs `describe` in a forked child process and returns what it returns. PCL 1.13's
+/// OURCVFHEstimation aborts on an Eigen assertion (or, built without assertions, writes out of
+/// bounds) when a smooth region keeps a single point after its refinement: the region's
+/// reference frame (sgurf) divides by a zero weight sum and comes out NaN. Real views of round
+/// objects do this (e.g. a YCB apple seen from some directions). In a child process such a cloud
+/// fails alone and is reported as not describable; the caller goes on.
+std::vector<Signature> describe_in_child(const std::function<std::vector<Signature>()>& describe,
+                                         const std::string& name) {
+    int fds[2];
+    if (::pipe(fds) != 0) throw std::runtime_error(name + ": pipe() failed");
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        ::close(fds[0]);
+        ::close(fds[1]);
+        throw std::runtime_error(name + ": fork() failed");
+    }
+    if (pid == 0) {  // the child: describe, write the result, leave without cleaning up
+        ::close(fds[0]);
+        // PCL's warnings and its assertion message stay in the child: the failure is reported.
+        const int null = ::open("/dev/null", O_WRONLY);
+        if (null >= 0) ::dup2(null, STDERR_FILENO);
+        std::string message;
+        std::vector<float> data;
+        std::uint64_t header[3] = {0, 0, 0};  // status (0 ok, 1 error), signatures, dimension
+        try {
+            const std::vector<Signature> signatures = describe();
+            header[1] = signatures.size();
+            header[2] = signatures.empty() ? 0 : signatures[0].size();
+            for (const Signature& sig : signatures) data.insert(data.end(), sig.begin(), sig.end());
+        } catch (const std::exception& e) {
+            header[0] = 1;
+            message = e.what();
+            header[1] = message.size();
+        }
+        const auto write_all = [&](const void* bytes, std::size_t size) {
+            const char* at = static_cast<const char*>(bytes);
+            while (size > 0) {
+                const ssize_t n = ::write(fds[1], at, size);
+                if (n <= 0) ::_exit(3);
+                at += n;
+                size -= static_cast<std::size_t>(n);
+            }
+        };
+        write_all(header, sizeof header);
+        if (header[0] == 0)
+            write_all(data.data(), data.size() * sizeof(float));
+        else
+            write_all(message.data(), message.size());
+        ::_exit(0);
+    }
+    ::close(fds[1]);
+    std::vector<char> bytes;
+    char buffer[1 << 16];
+    for (;;) {
+        const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+        if (n > 0) {
+            bytes.insert(bytes.end(), buffer, buffer + n);
+        } else if (n == 0 || errno != EINTR) {
+            break;
+        }
+    }
+    ::close(fds[0]);
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    std::uint64_t header[3];
+    const bool exited = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    if (!exited || bytes.size() < sizeof header)
+        throw std::invalid_argument(name + ": PCL's OURCVFHEstimation failed on this cloud (" +
+                                    (WIFSIGNALED(status)
+                                         ? "signal " + std::to_string(WTERMSIG(status))
+                                         : "exit status " + std::to_string(WEXITSTATUS(status))) +
+                                    "; a smooth region without a reference frame)");
+    std::memcpy(header, bytes.data(), sizeof header);
+    const char* payload = bytes.data() + sizeof header;
+    const std::size_t payload_size = bytes.size() - sizeof header;
+    if (header[0] != 0) {
+        if (payload_size != header[1]) throw std::runtime_error(name + ": truncated result");
+        throw std::invalid_argument(std::string(payload, payload_size));
+    }
+    if (payload_size != header[1] * header[2] * sizeof(float))
+        throw std::runtime_error(name + ": truncated result");
+    std::vector<Signature> signatures(header[1], Signature(header[2]));
+    for (std::size_t i = 0; i < signatures.size(); ++i)
+        std::memcpy(signatures[i].data(), payload + i * header[2] * sizeof(float),
+                    header[2] * sizeof(float));
+    return signatures;
+}
+
 class OurCvfh final : public PclBaseline {
   public:
     using PclBaseline::PclBaseline;
@@ -323,14 +418,18 @@ class OurCvfh final : public PclBaseline {
     std::vector<Signature> compute(std::span<const Eigen::Vector3f> input) const override {
         const Prepared p =
             prepare(describable_points(input, info_.name), options_, true, info_.name);
-        pcl::OURCVFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> cvfh;
-        set_cvfh_parameters(cvfh, p);
-        cvfh.setAxisRatio(0.8f);
-        cvfh.setMinAxisValue(0.925f);
-        cvfh.setRefineClusters(1.0f);
-        pcl::PointCloud<pcl::VFHSignature308> out;
-        cvfh.compute(out);
-        return finish_multi(vfh_signatures(out), info_.name);
+        return describe_in_child(
+            [&] {
+                pcl::OURCVFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> cvfh;
+                set_cvfh_parameters(cvfh, p);
+                cvfh.setAxisRatio(0.8f);
+                cvfh.setMinAxisValue(0.925f);
+                cvfh.setRefineClusters(1.0f);
+                pcl::PointCloud<pcl::VFHSignature308> out;
+                cvfh.compute(out);
+                return finish_multi(vfh_signatures(out), info_.name);
+            },
+            info_.name);
     }
 };
 
