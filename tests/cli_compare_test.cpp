@@ -13,31 +13,15 @@
 #include <sstream>
 #include <string>
 
+#include "cli_run.hpp"
+#include "error_of.hpp"
+
 namespace fs = std::filesystem;
+using esf::test::CliRun;
+using esf::test::quoted;
+using esf::test::read_text;
 
 namespace {
-
-struct CliRun {
-    int code = -1;
-    std::string out;
-    std::string err;
-};
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
-
-#define EXPECT_CONTAINS(text, part)                           \
-    do {                                                      \
-        const std::string text_ = (text), part_ = (part);     \
-        EXPECT_NE(text_.find(part_), std::string::npos)       \
-            << "  text: " << text_ << "\n  lacks: " << part_; \
-    } while (0)
 
 /// One generated model each of two categories (mug, bowl) and a small test set of their
 /// rendered views (other noise seeds than training), in a fresh temp folder per test.
@@ -57,17 +41,7 @@ class CliCompareTest : public ::testing::Test {
 
     std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
-    CliRun esf(const std::string& args) const {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string command = quoted(ESF_CLI) + " " + args + " >" + quoted(out.string()) +
-                                    " 2>" + quoted(err.string());
-        const int status = std::system(command.c_str());
-        CliRun run;
-        run.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        run.out = read_text(out);
-        run.err = read_text(err);
-        return run;
-    }
+    CliRun esf(const std::string& args) const { return esf::test::run_esf(args, dir_); }
 
     /// Renders views 0, 7 and 13 of the generated mug and bowl (noise seed 11) and writes
     /// test.csv (file,class) listing them, plus one row of a class no database has.

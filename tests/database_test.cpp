@@ -13,14 +13,8 @@
 #include <limits>
 #include <thread>
 
+#include "error_of.hpp"
 #include "esf/error.hpp"
-
-#define EXPECT_CONTAINS(text, part)                           \
-    do {                                                      \
-        const std::string text_ = (text), part_ = (part);     \
-        EXPECT_NE(text_.find(part_), std::string::npos)       \
-            << "  text: " << text_ << "\n  lacks: " << part_; \
-    } while (0)
 
 namespace esf {
 namespace {

@@ -1,8 +1,19 @@
 #pragma once
-// The message of the exception a call throws, for tests that check errors by their words.
+// Checking errors by their words: the message of the exception a call throws, and a check that a
+// text contains a part.
+
+#include <gtest/gtest.h>
 
 #include <exception>
 #include <string>
+
+/// Expects `text` to contain `part`, and prints both when it does not.
+#define EXPECT_CONTAINS(text, part)                           \
+    do {                                                      \
+        const std::string text_ = (text), part_ = (part);     \
+        EXPECT_NE(text_.find(part_), std::string::npos)       \
+            << "  text: " << text_ << "\n  lacks: " << part_; \
+    } while (0)
 
 namespace esf::test {
 

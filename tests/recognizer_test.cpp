@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "error_of.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/database.hpp"
 #include "esf/error.hpp"
@@ -30,10 +31,6 @@
 namespace fs = std::filesystem;
 
 namespace {
-
-#define EXPECT_CONTAINS(text, part)                            \
-    EXPECT_NE(std::string(text).find(part), std::string::npos) \
-        << "expected \"" << (part) << "\" in \"" << (text) << "\""
 
 /// The message of the exception `expr` throws, of type `type` ("" when it does not throw).
 #define MESSAGE_OF(type, expr)                          \

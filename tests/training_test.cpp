@@ -20,13 +20,6 @@
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
 
-#define EXPECT_CONTAINS(text, part)                           \
-    do {                                                      \
-        const std::string text_ = (text), part_ = (part);     \
-        EXPECT_NE(text_.find(part_), std::string::npos)       \
-            << "  text: " << text_ << "\n  lacks: " << part_; \
-    } while (0)
-
 namespace esf {
 namespace {
 
