@@ -119,6 +119,20 @@ TEST_F(CliCompareTest, UnknownDescriptorNamesListTheValidOnes) {
     EXPECT_FALSE(fs::exists(path("work")));  // nothing trained
 }
 
+TEST_F(CliCompareTest, ABrokenMeshIsNamedAndTheOthersAreStored) {
+    std::ofstream(path("root/bowl/broken.ply")) << "ply\ngarbage\n";
+    const std::string db = path("db.sqlite");
+    const CliRun train = esf("train " + quoted(path("root")) + " -o " + quoted(db) +
+                             " --level 0 --samples 2000 --threads 2");
+    EXPECT_EQ(train.code, 2) << train.err;
+    EXPECT_CONTAINS(train.err, "bowl/broken failed: " + path("root/bowl/broken.ply"));
+    EXPECT_CONTAINS(train.out, "trained 2 models");
+    EXPECT_CONTAINS(train.out, "1 failed");
+    const CliRun info = esf("info --json " + quoted(db));
+    ASSERT_EQ(info.code, 0) << info.err;
+    EXPECT_EQ(nlohmann::json::parse(info.out).at("models"), 2);
+}
+
 TEST_F(CliCompareTest, CompareTwoDescriptorsPrintsOneRowEach) {
     const std::string test_set = write_test_set();
     const std::string common = "compare " + quoted(path("root")) + " " + quoted(test_set) +

@@ -102,14 +102,17 @@ void run_train(const TrainArgs& args) {
         for (const auto& f : result.failures)
             out["failures"].push_back({{"model", f.model}, {"error", f.error}});
         std::cout << out.dump(2) << '\n';
-        return;
+    } else {
+        std::printf(
+            "%s: trained %zu models (%zu views, %zu skipped) with %s in %.1f s, %.0f views/s",
+            args.output.c_str(), result.models_trained, result.views, result.views_skipped,
+            args.descriptor.c_str(), elapsed, rate);
+        if (result.models_existing) std::printf("; %zu already stored", result.models_existing);
+        if (result.models_failed) std::printf("; %zu failed", result.models_failed);
+        std::printf("\n");
     }
-    std::printf("%s: trained %zu models (%zu views, %zu skipped) with %s in %.1f s, %.0f views/s",
-                args.output.c_str(), result.models_trained, result.views, result.views_skipped,
-                args.descriptor.c_str(), elapsed, rate);
-    if (result.models_existing) std::printf("; %zu already stored", result.models_existing);
-    if (result.models_failed) std::printf("; %zu failed", result.models_failed);
-    std::printf("\n");
+    // As for a batch of clouds: the good models are stored, the run reports the others.
+    if (result.models_failed) throw ExitStatus{kExitRuntime};
 }
 
 }  // namespace
@@ -126,7 +129,8 @@ void add_train_command(CLI::App& app) {
         "resume an interrupted run or to add new models; other settings are refused.\n"
         "With ROOT/catalog.csv (or --catalog), non-metric models are scaled to the median size\n"
         "of their category's metric models and keep the catalog's shape group.\n"
-        "Meshes that fail to load are reported and stored as failed (retried next run).");
+        "Meshes that fail to load are reported and stored as failed (retried next run); the\n"
+        "exit status is then 2.");
     cmd->add_option("root", args->root, "Folder of <category>/<model>.<ext> meshes")
         ->required()
         ->check(CLI::ExistingDirectory);
