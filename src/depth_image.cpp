@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "esf/error.hpp"
+#include "png_writer.hpp"
 
 namespace esf {
 
@@ -26,7 +27,6 @@ constexpr std::size_t kMaxPixels = std::size_t{1} << 28;
 struct PngState {
     char message[256] = {};
     std::istream* in = nullptr;
-    std::ostream* out = nullptr;
 };
 
 void on_error(png_structp png, png_const_charp message) {
@@ -42,17 +42,6 @@ void read_bytes(png_structp png, png_bytep data, png_size_t length) {
     state->in->read(reinterpret_cast<char*>(data), static_cast<std::streamsize>(length));
     if (static_cast<png_size_t>(state->in->gcount()) != length)
         png_error(png, "truncated file (unexpected end of data)");
-}
-
-void write_bytes(png_structp png, png_bytep data, png_size_t length) {
-    auto* state = static_cast<PngState*>(png_get_error_ptr(png));
-    state->out->write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(length));
-    if (!*state->out) png_error(png, "write failed");
-}
-
-void flush_bytes(png_structp png) {
-    auto* state = static_cast<PngState*>(png_get_error_ptr(png));
-    state->out->flush();
 }
 
 struct Header {
@@ -74,17 +63,6 @@ bool read_pixels(png_structp png, png_infop info, png_bytepp rows) {
     png_read_update_info(png, info);
     png_read_image(png, rows);
     png_read_end(png, nullptr);
-    return true;
-}
-
-bool write_pixels(png_structp png, png_infop info, png_uint_32 width, png_uint_32 height,
-                  png_bytepp rows) {
-    if (setjmp(png_jmpbuf(png))) return false;
-    png_set_IHDR(png, info, width, height, 16, PNG_COLOR_TYPE_GRAY, PNG_INTERLACE_NONE,
-                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    png_write_info(png, info);
-    png_write_image(png, rows);
-    png_write_end(png, nullptr);
     return true;
 }
 
@@ -179,28 +157,20 @@ DepthImage read_depth_png(const std::string& path) {
 
 void write_depth_png(std::ostream& out, const DepthImage& image, const std::string& name) {
     check_image(image, "write_depth_png");
-    const std::size_t row_bytes = 2 * static_cast<std::size_t>(image.width);
-    std::vector<png_byte> bytes(row_bytes * image.height);
+    std::vector<std::uint8_t> samples(2 * image.depth.size());  // 16-bit big-endian
     for (std::size_t i = 0; i < image.depth.size(); ++i) {
-        bytes[2 * i] = static_cast<png_byte>(image.depth[i] >> 8);
-        bytes[2 * i + 1] = static_cast<png_byte>(image.depth[i] & 0xFF);
+        samples[2 * i] = static_cast<std::uint8_t>(image.depth[i] >> 8);
+        samples[2 * i + 1] = static_cast<std::uint8_t>(image.depth[i] & 0xFF);
     }
-    std::vector<png_bytep> rows(image.height);
-    for (std::size_t v = 0; v < image.height; ++v) rows[v] = bytes.data() + v * row_bytes;
-
-    PngState state;
-    state.out = &out;
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_error, on_warning);
-    png_infop info = png ? png_create_info_struct(png) : nullptr;
-    struct Guard {
-        png_structp* png;
-        png_infop* info;
-        ~Guard() { png_destroy_write_struct(png, info); }
-    } guard{&png, &info};
-    if (!png || !info) throw IoError(file_message(name, 0, "cannot initialise libpng"));
-    png_set_write_fn(png, &state, write_bytes, flush_bytes);
-    if (!write_pixels(png, info, image.width, image.height, rows.data()))
-        throw IoError(file_message(name, 0, std::string("cannot write PNG: ") + state.message));
+    std::vector<std::uint8_t> png;
+    try {
+        png = detail::encode_png(samples, static_cast<std::uint32_t>(image.width),
+                                 static_cast<std::uint32_t>(image.height), 1, 16);
+    } catch (const std::runtime_error& e) {
+        throw IoError(file_message(name, 0, std::string("cannot write PNG: ") + e.what()));
+    }
+    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+    if (!out) throw IoError(file_message(name, 0, "write failed"));
 }
 
 void write_depth_png(const std::string& path, const DepthImage& image) {

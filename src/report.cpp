@@ -1,11 +1,8 @@
 #include "esf/report.hpp"
 
-#include <png.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <csetjmp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +12,7 @@
 #include <system_error>
 
 #include "esf/error.hpp"
+#include "png_writer.hpp"
 
 namespace esf {
 
@@ -259,55 +257,9 @@ int text_width(const std::string& s, int scale) {
 
 // ---- PNG ------------------------------------------------------------------------------------
 
-struct PngState {
-    std::vector<std::uint8_t>* out;
-    std::string error;
-};
-
-void on_png_error(png_structp png, png_const_charp message) {
-    static_cast<PngState*>(png_get_error_ptr(png))->error = message;
-    png_longjmp(png, 1);
-}
-void on_png_warning(png_structp, png_const_charp) {}
-void append_bytes(png_structp png, png_bytep data, png_size_t length) {
-    auto* state = static_cast<PngState*>(png_get_io_ptr(png));
-    state->out->insert(state->out->end(), data, data + length);
-}
-void flush_nothing(png_structp) {}
-
-// Holds only trivial locals: libpng reports errors through longjmp.
-bool write_png_rows(png_structp png, png_infop info, png_uint_32 width, png_uint_32 height,
-                    png_bytepp rows) {
-    if (setjmp(png_jmpbuf(png))) return false;
-    png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-    png_write_info(png, info);
-    png_write_image(png, rows);
-    png_write_end(png, nullptr);
-    return true;
-}
-
 std::vector<std::uint8_t> encode_png(const Image& image) {
-    std::vector<std::uint8_t> out;
-    PngState state{&out, {}};
-    png_structp png =
-        png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error, on_png_warning);
-    png_infop info = png ? png_create_info_struct(png) : nullptr;
-    struct Guard {
-        png_structp* png;
-        png_infop* info;
-        ~Guard() { png_destroy_write_struct(png, info); }
-    } guard{&png, &info};
-    if (!png || !info) throw std::runtime_error("png: cannot allocate the encoder");
-    png_set_write_fn(png, &state, append_bytes, flush_nothing);
-    std::vector<png_bytep> rows(static_cast<std::size_t>(image.height()));
-    auto* base = const_cast<std::uint8_t*>(image.pixels().data());
-    for (std::size_t y = 0; y < rows.size(); ++y)
-        rows[y] = base + y * static_cast<std::size_t>(image.width()) * 3;
-    if (!write_png_rows(png, info, static_cast<png_uint_32>(image.width()),
-                        static_cast<png_uint_32>(image.height()), rows.data()))
-        throw std::runtime_error("png: " + state.error);
-    return out;
+    return detail::encode_png(image.pixels(), static_cast<std::uint32_t>(image.width()),
+                              static_cast<std::uint32_t>(image.height()), 3, 8);
 }
 
 // ---- confusion layout (shared by the PNG and the SVG) ---------------------------------------
