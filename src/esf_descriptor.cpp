@@ -480,10 +480,19 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     const std::size_t n = ws.scaled.size();
     ws.cells.resize(n);
     ws.grid.clear();
+    // The fast sampler reads the points one axis at a time (for gathers): copied in this pass.
+    ws.xs.resize(pcl ? 0 : n);
+    ws.ys.resize(pcl ? 0 : n);
+    ws.zs.resize(pcl ? 0 : n);
     for (std::size_t i = 0; i < n; ++i) {
         const auto& p = ws.scaled[i];
         ws.cells[i] = pack_cell(cell_of(p.x(), half), cell_of(p.y(), half), cell_of(p.z(), half));
         ws.grid.set(ws.cells[i]);
+        if (!pcl) {
+            ws.xs[i] = p.x();
+            ws.ys[i] = p.y();
+            ws.zs[i] = p.z();
+        }
     }
     ws.grid.dilate(opt.grid_size);
 
@@ -518,14 +527,6 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         const AngleBins& bins = angle_bins();
         Xoshiro256 random(opt.seed);
         const auto count = static_cast<std::uint32_t>(n);
-        ws.xs.resize(n);
-        ws.ys.resize(n);
-        ws.zs.resize(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            ws.xs[i] = ws.scaled[i].x();
-            ws.ys[i] = ws.scaled[i].y();
-            ws.zs[i] = ws.scaled[i].z();
-        }
         static const bool avx2 = cpu_has_avx2();  // CPU features do not change while running
         // Attempts are drawn eight at a time and consumed in order; draws past the last accepted
         // triple are discarded, so the result is that of drawing one attempt at a time.
