@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <assimp/Importer.hpp>
 #include <bit>
 #include <cerrno>
@@ -180,6 +181,14 @@ Eigen::Vector3f Mesh::max_corner() const {
     Eigen::Vector3f m = vertices.front();
     for (const auto& v : vertices) m = m.cwiseMax(v);
     return m;
+}
+
+double Mesh::bounding_radius() const {
+    const Eigen::Vector3d centre =
+        (min_corner().cast<double>() + max_corner().cast<double>()) / 2.0;
+    double radius = 0.0;
+    for (const auto& v : vertices) radius = std::max(radius, (v.cast<double>() - centre).norm());
+    return radius;
 }
 
 void check_mesh(const Mesh& mesh, const std::string& what) {

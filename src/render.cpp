@@ -402,11 +402,8 @@ MeshRenderer::MeshRenderer(const Mesh& mesh, const RenderOptions& options)
     if (!(extent > 0.0)) throw std::invalid_argument("mesh has zero extent (all vertices equal)");
     impl_->centre = (lo + hi) / 2.0;
     impl_->scale = options.target_extent ? *options.target_extent / extent : options.scale;
-    double radius = 0.0;
-    for (const auto& v : mesh.vertices)
-        radius = std::max(radius, (v.cast<double>() - impl_->centre).norm());
     // Slightly enlarged: the scene holds float vertices.
-    impl_->radius = radius * impl_->scale * (1.0 + 1e-5);
+    impl_->radius = mesh.bounding_radius() * impl_->scale * (1.0 + 1e-5);
 
     const CameraIntrinsics& camera = options.camera;
     if (options.distance) {

@@ -232,15 +232,11 @@ void prepare_job(Job& job, const TrainingOptions& options) {
         }
         if (render.distance) {
             // Stand back from a model too large to be seen whole from the given distance.
-            const Eigen::Vector3f lo = mesh.min_corner(), hi = mesh.max_corner();
-            const double extent = static_cast<double>((hi - lo).maxCoeff());
-            const double scale =
-                render.target_extent ? *render.target_extent / extent : render.scale;
-            const Eigen::Vector3d centre = (lo + hi).cast<double>() / 2.0;
-            double radius = 0.0;
-            for (const auto& v : mesh.vertices)
-                radius = std::max(radius, (v.cast<double>() - centre).norm());
-            radius *= scale;
+            const double extent =
+                static_cast<double>((mesh.max_corner() - mesh.min_corner()).maxCoeff());
+            const double radius =
+                mesh.bounding_radius() *
+                (render.target_extent ? *render.target_extent / extent : render.scale);
             if (*render.distance < kTrainingMinDistanceFactor * radius)
                 render.distance = kTrainingMinDistanceFactor * radius;
         }

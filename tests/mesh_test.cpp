@@ -203,6 +203,16 @@ TEST_F(MeshTest, MinMaxCornerOfEmptyMeshThrows) {
     const esf::Mesh empty;
     EXPECT_THROW((void)empty.min_corner(), std::invalid_argument);
     EXPECT_THROW((void)empty.max_corner(), std::invalid_argument);
+    EXPECT_THROW((void)empty.bounding_radius(), std::invalid_argument);
+}
+
+TEST_F(MeshTest, BoundingRadiusIsAroundTheBoxCentre) {
+    esf::Mesh mesh;
+    // Box [0, 2] x [0, 4] x [0, 1]: centre (1, 2, 0.5). The corner (2, 4, 1) is
+    // sqrt(1 + 4 + 0.25) away; (1, 0, 0.5) is only 2 away.
+    mesh.vertices = {{0, 0, 0}, {2, 4, 1}, {1, 0, 0.5f}};
+    mesh.triangles = {{0, 1, 2}};
+    EXPECT_DOUBLE_EQ(mesh.bounding_radius(), std::sqrt(5.25));
 }
 
 TEST_F(MeshTest, LoadErrorsNameTheFile) {

@@ -17,6 +17,9 @@ struct Mesh {
     /// when the mesh has no vertex.
     Eigen::Vector3f min_corner() const;
     Eigen::Vector3f max_corner() const;
+    /// Radius of the sphere around the bounding box's centre that holds every vertex (file
+    /// units, accumulated in double); throws std::invalid_argument when the mesh has no vertex.
+    double bounding_radius() const;
 };
 
 /// Throws std::invalid_argument when the mesh has no triangle, a triangle index outside
