@@ -14,15 +14,13 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/descriptor.hpp"
 
 namespace {
 
-std::filesystem::path data_dir() {
-    if (const char* env = std::getenv("ESF_DATA"); env && *env) return env;
-    return ESF_DATA_DEFAULT;
-}
+using esf::bench::data_dir;
 
 // A Kinect mug (stereo scene), a large box front and a small box far away.
 const std::vector<std::string> kClouds = {

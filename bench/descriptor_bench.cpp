@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <random>
 
+#include "bench_data.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/esf_descriptor.hpp"
 #include "esf_trace.hpp"
@@ -48,9 +49,7 @@ void BM_EsfPclSamplerCylinder(benchmark::State& state) {
 BENCHMARK(BM_EsfPclSamplerCylinder)->Unit(benchmark::kMillisecond);
 
 void BM_EsfFastRealMilk(benchmark::State& state) {
-    const char* env = std::getenv("ESF_DATA");
-    const std::filesystem::path file =
-        std::filesystem::path(env ? env : "../shared/data") / "real/pcl/milk_test.pcd";
+    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
     if (!std::filesystem::exists(file)) {
         state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
         return;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.hpp"
 #include "esf/mesh.hpp"
 #include "esf/render.hpp"
 #include "esf/view_sphere.hpp"
@@ -21,10 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path data_dir() {
-    if (const char* env = std::getenv("ESF_DATA"); env && *env) return env;
-    return ESF_DATA_DEFAULT;
-}
+using esf::bench::data_dir;
 
 /// Dense YCB scans (16k triangles, metres) and light KIT models (800 triangles, rescaled).
 struct Sample {

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/database.hpp"
 #include "esf/recognizer.hpp"
@@ -164,7 +165,7 @@ int main(int argc, char** argv) {
                  db_path.c_str(), info.views, info.models, info.setup.kind.name.c_str(),
                  info.setup.esf.samples, g_threads);
 
-    const fs::path scenes_dir = fs::path(ESF_DATA_DEFAULT) / "real" / "scenes";
+    const fs::path scenes_dir = esf::bench::data_dir() / "real" / "scenes";
     std::vector<std::pair<std::string, std::unique_ptr<esf::PointCloud>>> scenes;
     if (fs::is_directory(scenes_dir))
         for (const auto& entry : fs::directory_iterator(scenes_dir)) {

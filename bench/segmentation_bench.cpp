@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/depth_image.hpp"
 #include "esf/segmentation.hpp"
@@ -34,10 +35,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path scene_dir() {
-    const char* env = std::getenv("ESF_DATA");
-    return fs::path(env && *env ? env : "../shared/data") / "real/scenes";
-}
+fs::path scene_dir() { return esf::bench::data_dir() / "real/scenes"; }
 
 const std::vector<std::string>& scene_names() {
     static const std::vector<std::string> names = [] {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_data.hpp"
 #include "esf/database.hpp"
 #include "esf/esf_descriptor.hpp"
 #include "esf/mesh.hpp"
@@ -23,10 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path data_dir() {
-    if (const char* env = std::getenv("ESF_DATA"); env && *env) return env;
-    return fs::path(ESF_SOURCE_DIR) / ".." / "shared" / "data";
-}
+using esf::bench::data_dir;
 
 /// A mix of the shared meshes: dense YCB scans (PLY) and light KIT models (OBJ).
 const std::vector<std::string> kSample = {
