@@ -4,6 +4,8 @@
 
 // GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// Vectors passed between this file's internal AVX-512 functions (same target, never exported).
+#pragma GCC diagnostic ignored "-Wpsabi"
 
 #include <algorithm>
 #include <cassert>
@@ -108,7 +110,8 @@ void visited_scalar(std::span<const std::uint32_t> starts, std::span<const std::
         visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
 }
 
-#define ESF_TARGET_AVX512 __attribute__((target("avx512f,avx512bw,avx512vl,avx2,bmi2")))
+#define ESF_TARGET_AVX512 \
+    __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx2,fma,bmi2")))
 #define ESF_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
 
 ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
@@ -134,94 +137,184 @@ ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
 }
 
 // The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
-// one line per lane, with the reference's major-axis form (two minor error terms). Lines are
-// sorted by length, so a group runs min(n) cells without masks and only its few longer lanes
-// run on with an activity mask. Gathers are never masked (slow on some CPUs): lanes past their
-// end wrap their cell index into the grid and their bit is dropped.
+// one line per lane. Lines are sorted by length, so a group runs min(n) cells without masks and
+// only its few longer lanes run on with an activity mask. Gathers are never masked (slow on some
+// CPUs): lanes past their end wrap their cell index into the grid and their bit is dropped.
+
+// The AVX-512 kernel looks up two cells per gather and has no loop-carried error terms:
+//
+// - Closed form. After i cells the reference has stepped a minor axis of length a
+//   q(i) = floor((2 a i + L - 1) / (2 L)) times (its error term starts at 2a - L, gains 2a per
+//   cell and loses 2L per step). That is floor(i * a/L + (L - 1/2) / (2L)) exactly: the fraction
+//   is never within 1/(4L) >= 1/252 of an integer, and the float evaluation (products of integers
+//   below 2^13 by one rounded reciprocal, one fused multiply-add) errs by less than 1e-5.
+// - Block table. Byte j of `blocks` (from kBlockPad) holds the 2x2x2 cells j + kBlockOffsets[k]
+//   as bit k. Cells i and i+1 of a line differ by one step along each axis that moves, so both
+//   lie in the block anchored at cell i minus one step along each axis the line walks down.
+
+constexpr std::int32_t kBlockOffsets[8] = {0, 1, 64, 65, 4096, 4097, 4160, 4161};
+constexpr std::int32_t kBlockPad = 4224;  // anchors reach down to cell -4161
+constexpr std::int32_t kGridCells = kGridSide * kGridSide * kGridSide;
+
+ESF_TARGET_AVX512 void build_blocks(const VoxelGrid& grid, std::vector<std::uint8_t>& blocks) {
+    constexpr int kWordPad = kBlockPad / 64;  // 66 zero words before the grid, 66 after
+    std::array<std::uint64_t, kWordPad + kGridWords + kWordPad> words{};
+    std::copy(grid.words.begin(), grid.words.end(), words.begin() + kWordPad);
+    blocks.resize(static_cast<std::size_t>(kBlockPad + kGridCells + 64));
+    __m512i bit[8];
+    for (int k = 0; k < 8; ++k) bit[k] = _mm512_set1_epi8(static_cast<char>(1 << k));
+    for (int chunk = -kWordPad; chunk < kGridWords; ++chunk) {  // cells 64 chunk .. 64 chunk + 63
+        const std::uint64_t* w = words.data() + kWordPad + chunk;
+        __m512i acc = _mm512_setzero_si512();
+        // Most rows of a view's grid are empty: so are their blocks.
+        if ((w[0] | w[1] | w[2] | w[64] | w[65] | w[66]) != 0) {
+            for (int k = 0; k < 8; ++k) {
+                const int word = kBlockOffsets[k] / 64, shift = kBlockOffsets[k] % 64;
+                const std::uint64_t plane =
+                    shift == 0 ? w[word] : (w[word] >> 1) | (w[word + 1] << 63);
+                acc = _mm512_or_si512(acc, _mm512_maskz_mov_epi8(plane, bit[k]));
+            }
+        }
+        _mm512_storeu_si512(blocks.data() + kBlockPad + 64 * chunk, acc);
+    }
+}
+
+struct PairLanes {
+    __m512 start, major_step, step1, step2;  // cell index arithmetic, in float (exact: < 2^24)
+    __m512 slope1, slope2, intercept;        // q(i) = floor(i * slope + intercept)
+    __m512i anchor_offset, first_bit, major_flip, flip1, flip2, limit, occupied;
+};
+
+/// The value of the major axis, and of the first and second minor axis (x-major: y, z;
+/// y-major: x, z; z-major: x, y) of each lane.
+struct AxisRoles {
+    __mmask16 x_major, y_major, z_major;
+};
+
+ESF_TARGET_AVX512 inline __m512i major_of(const AxisRoles& r, const __m512i* v) {
+    return _mm512_mask_blend_epi32(r.x_major, _mm512_mask_blend_epi32(r.y_major, v[2], v[1]), v[0]);
+}
+ESF_TARGET_AVX512 inline __m512i minor1_of(const AxisRoles& r, const __m512i* v) {
+    return _mm512_mask_blend_epi32(r.x_major, v[0], v[1]);
+}
+ESF_TARGET_AVX512 inline __m512i minor2_of(const AxisRoles& r, const __m512i* v) {
+    return _mm512_mask_blend_epi32(r.z_major, v[2], v[1]);
+}
+
+ESF_TARGET_AVX512 PairLanes setup_pairs(__m512i s, __m512i t, bool skip_known) {
+    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
+    const __m512i m63 = _mm512_set1_epi32(63);
+    __m512i length[3], step[3], block_bit[3];
+    __m512i anchor_offset = zero, first_bit = zero;
+    for (int k = 0; k < 3; ++k) {
+        const unsigned shift = static_cast<unsigned>(k * kGridBits);
+        const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
+                                           _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
+        length[k] = _mm512_abs_epi32(d);
+        const __m512i unit = _mm512_set1_epi32(1 << shift);
+        const __mmask16 down = _mm512_cmplt_epi32_mask(d, zero);
+        step[k] = _mm512_mask_sub_epi32(unit, down, zero, unit);
+        block_bit[k] = _mm512_set1_epi32(1 << k);
+        anchor_offset = _mm512_mask_sub_epi32(anchor_offset, down, anchor_offset, unit);
+        first_bit = _mm512_mask_or_epi32(first_bit, down, first_bit, block_bit[k]);
+    }
+    const __mmask16 x_major = _mm512_cmpge_epi32_mask(length[0], length[1]) &
+                              _mm512_cmpge_epi32_mask(length[0], length[2]);
+    const __mmask16 y_major =
+        static_cast<__mmask16>(~x_major & _mm512_cmpge_epi32_mask(length[1], length[2]));
+    const __mmask16 z_major = static_cast<__mmask16>(~(x_major | y_major));
+    const AxisRoles roles{x_major, y_major, z_major};
+    const __m512i cells = _mm512_max_epi32(major_of(roles, length), one);  // visited: max(L, 1)
+    const __m512 l = _mm512_cvtepi32_ps(cells);
+    const __m512 half_per_cell = _mm512_div_ps(_mm512_set1_ps(0.5f), l);  // 1 / (2L)
+    PairLanes lanes;
+    lanes.start = _mm512_cvtepi32_ps(s);
+    lanes.major_step = _mm512_cvtepi32_ps(major_of(roles, step));
+    lanes.step1 = _mm512_cvtepi32_ps(minor1_of(roles, step));
+    lanes.step2 = _mm512_cvtepi32_ps(minor2_of(roles, step));
+    const __m512i a1 = minor1_of(roles, length), a2 = minor2_of(roles, length);
+    lanes.slope1 = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(a1, a1)), half_per_cell);
+    lanes.slope2 = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(a2, a2)), half_per_cell);
+    lanes.intercept = _mm512_mul_ps(_mm512_sub_ps(l, _mm512_set1_ps(0.5f)), half_per_cell);
+    lanes.anchor_offset = anchor_offset;
+    lanes.first_bit = first_bit;
+    lanes.major_flip = major_of(roles, block_bit);
+    lanes.flip1 = minor1_of(roles, block_bit);
+    lanes.flip2 = minor2_of(roles, block_bit);
+    // With known ends, cells 0, 1 and L-1 count without a look-up and the walk covers 2..L-2.
+    lanes.limit = skip_known ? _mm512_sub_epi32(cells, one) : cells;
+    lanes.occupied = skip_known ? _mm512_min_epi32(cells, _mm512_set1_epi32(3)) : zero;
+    return lanes;
+}
+
+/// Cells i and i+1 of every lane (lanes past their end masked when `tail`).
+template <bool tail>
+ESF_TARGET_AVX512 inline void trace_pair(PairLanes& lanes, const int* blocks, int i) {
+    constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+    const __m512 fi = _mm512_set1_ps(static_cast<float>(i));
+    const __m512 fi1 = _mm512_set1_ps(static_cast<float>(i + 1));
+    const __m512 q1 =
+        _mm512_roundscale_ps(_mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept), kFloor);
+    const __m512 q2 =
+        _mm512_roundscale_ps(_mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept), kFloor);
+    const __m512 next1 =
+        _mm512_roundscale_ps(_mm512_fmadd_ps(fi1, lanes.slope1, lanes.intercept), kFloor);
+    const __m512 next2 =
+        _mm512_roundscale_ps(_mm512_fmadd_ps(fi1, lanes.slope2, lanes.intercept), kFloor);
+    const __m512 position = _mm512_fmadd_ps(
+        q2, lanes.step2,
+        _mm512_fmadd_ps(q1, lanes.step1, _mm512_fmadd_ps(fi, lanes.major_step, lanes.start)));
+    __m512i cell = _mm512_cvttps_epi32(position);
+    if (tail) cell = _mm512_and_si512(cell, _mm512_set1_epi32(kGridCells - 1));
+    const __m512i block =
+        _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), static_cast<__mmask16>(0xffff),
+                                    _mm512_add_epi32(cell, lanes.anchor_offset), blocks, 1);
+    __m512i next_bit = _mm512_mask_or_epi32(lanes.major_flip, _mm512_cmpneq_ps_mask(q1, next1),
+                                            lanes.major_flip, lanes.flip1);
+    next_bit =
+        _mm512_mask_or_epi32(next_bit, _mm512_cmpneq_ps_mask(q2, next2), next_bit, lanes.flip2);
+    next_bit = _mm512_xor_si512(next_bit, lanes.first_bit);
+    const __m512i one = _mm512_set1_epi32(1);
+    __mmask16 first = _mm512_test_epi32_mask(block, _mm512_sllv_epi32(one, lanes.first_bit));
+    __mmask16 second = _mm512_test_epi32_mask(block, _mm512_sllv_epi32(one, next_bit));
+    if (tail) {
+        first &= _mm512_cmpgt_epi32_mask(lanes.limit, _mm512_set1_epi32(i));
+        second &= _mm512_cmpgt_epi32_mask(lanes.limit, _mm512_set1_epi32(i + 1));
+    }
+    lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, first, lanes.occupied, one);
+    lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, second, lanes.occupied, one);
+}
 
 ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
                                           std::span<const std::uint32_t> starts,
                                           std::span<const std::uint32_t> ends,
                                           std::span<std::uint16_t> occupied,
-                                          std::span<std::uint8_t> visited, TraceScratch& scratch) {
+                                          std::span<std::uint8_t> visited, TraceScratch& scratch,
+                                          bool skip_known) {
     visited_avx512(starts, ends, visited);
     sort_by_length(visited, scratch);
-    const auto* words32 = reinterpret_cast<const int*>(grid.words.data());
+    build_blocks(grid, scratch.blocks);
+    const auto* blocks = reinterpret_cast<const int*>(scratch.blocks.data() + kBlockPad);
     const auto* start32 = reinterpret_cast<const int*>(starts.data());
     const auto* end32 = reinterpret_cast<const int*>(ends.data());
     const std::size_t count = starts.size();
-    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
-    const __m512i m63 = _mm512_set1_epi32(63), m31 = _mm512_set1_epi32(31);
-    const __m512i all_cells = _mm512_set1_epi32(kGridSide * kGridSide * kGridSide - 1);
+    const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
     for (std::size_t group = 0; group < count; group += 16) {
-        const std::size_t lanes = std::min<std::size_t>(16, count - group);
-        const __mmask16 live = static_cast<__mmask16>((1u << lanes) - 1u);
+        const std::size_t size = std::min<std::size_t>(16, count - group);
+        const __mmask16 live = static_cast<__mmask16>((1u << size) - 1u);
         const __m512i ids = _mm512_maskz_loadu_epi32(live, scratch.order.data() + group);
-        const __m512i s = _mm512_mask_i32gather_epi32(zero, live, ids, start32, 4);
-        const __m512i t = _mm512_mask_i32gather_epi32(zero, live, ids, end32, 4);
-        __m512i length[3], step[3];
-        for (int k = 0; k < 3; ++k) {
-            const unsigned shift = static_cast<unsigned>(k * kGridBits);
-            const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
-                                               _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
-            length[k] = _mm512_abs_epi32(d);
-            const __m512i unit = _mm512_set1_epi32(1 << shift);
-            step[k] = _mm512_mask_sub_epi32(unit, _mm512_cmplt_epi32_mask(d, zero), zero, unit);
-        }
-        const __mmask16 x_major = _mm512_cmpge_epi32_mask(length[0], length[1]) &
-                                  _mm512_cmpge_epi32_mask(length[0], length[2]);
-        const __mmask16 y_major =
-            static_cast<__mmask16>(~x_major & _mm512_cmpge_epi32_mask(length[1], length[2]));
-        const __mmask16 z_major = static_cast<__mmask16>(~(x_major | y_major));
-        const __m512i major_length =
-            _mm512_max_epi32(_mm512_max_epi32(length[0], length[1]), length[2]);
-        const __m512i major_step = _mm512_mask_blend_epi32(
-            x_major, _mm512_mask_blend_epi32(y_major, step[2], step[1]), step[0]);
-        // Minor axes: x-major (y, z), y-major (x, z), z-major (x, y).
-        const __m512i len1 = _mm512_mask_blend_epi32(x_major, length[0], length[1]);
-        const __m512i step1 = _mm512_mask_blend_epi32(x_major, step[0], step[1]);
-        const __m512i len2 = _mm512_mask_blend_epi32(z_major, length[2], length[1]);
-        const __m512i step2 = _mm512_mask_blend_epi32(z_major, step[2], step[1]);
-        const __m512i inc1 = _mm512_add_epi32(len1, len1), inc2 = _mm512_add_epi32(len2, len2);
-        __m512i e1 = _mm512_sub_epi32(inc1, major_length),
-                e2 = _mm512_sub_epi32(inc2, major_length);
-        const __m512i dec = _mm512_add_epi32(major_length, major_length);
-        const int shortest = visited[scratch.order[group]];
-        const int longest = visited[scratch.order[group + lanes - 1]];
-        __m512i cell = s, in = zero;
-#define ESF_ADVANCE()                                                            \
-    do {                                                                         \
-        cell = _mm512_add_epi32(cell, major_step);                               \
-        const __mmask16 step_1 = _mm512_cmpgt_epi32_mask(e1, zero);              \
-        const __mmask16 step_2 = _mm512_cmpgt_epi32_mask(e2, zero);              \
-        cell = _mm512_mask_add_epi32(cell, step_1, cell, step1);                 \
-        cell = _mm512_mask_add_epi32(cell, step_2, cell, step2);                 \
-        e1 = _mm512_add_epi32(_mm512_mask_sub_epi32(e1, step_1, e1, dec), inc1); \
-        e2 = _mm512_add_epi32(_mm512_mask_sub_epi32(e2, step_2, e2, dec), inc2); \
-    } while (0)
-        int i = 0;
-        for (; i < shortest; ++i) {
-            const __m512i word = _mm512_i32gather_epi32(_mm512_srli_epi32(cell, 5), words32, 4);
-            in = _mm512_add_epi32(
-                in, _mm512_and_si512(_mm512_srlv_epi32(word, _mm512_and_si512(cell, m31)), one));
-            ESF_ADVANCE();
-        }
-        if (i < longest) {
-            const __m512i n = _mm512_max_epi32(major_length, one);
-            for (; i < longest; ++i) {
-                const __mmask16 active = _mm512_cmpgt_epi32_mask(n, _mm512_set1_epi32(i));
-                const __m512i word = _mm512_i32gather_epi32(
-                    _mm512_srli_epi32(_mm512_and_si512(cell, all_cells), 5), words32, 4);
-                in = _mm512_mask_add_epi32(
-                    in, active, in,
-                    _mm512_and_si512(_mm512_srlv_epi32(word, _mm512_and_si512(cell, m31)), one));
-                ESF_ADVANCE();
-            }
-        }
-#undef ESF_ADVANCE
+        const __m512i zero = _mm512_setzero_si512();
+        PairLanes lanes =
+            setup_pairs(_mm512_mask_i32gather_epi32(zero, live, ids, start32, 4),
+                        _mm512_mask_i32gather_epi32(zero, live, ids, end32, 4), skip_known);
+        const int shortest = visited[scratch.order[group]] - end_skip;
+        const int longest = visited[scratch.order[group + size - 1]] - end_skip;
+        int i = first_cell;
+        for (; i + 1 < shortest; i += 2) trace_pair<false>(lanes, blocks, i);
+        for (; i < longest; i += 2) trace_pair<true>(lanes, blocks, i);
         alignas(64) std::uint32_t result[16];
-        _mm512_store_si512(result, in);
-        for (std::size_t k = 0; k < lanes; ++k)
+        _mm512_store_si512(result, lanes.occupied);
+        for (std::size_t k = 0; k < size; ++k)
             occupied[scratch.order[group + k]] = static_cast<std::uint16_t>(result[k]);
     }
 }
@@ -309,7 +402,8 @@ enum class Kernel { kScalar, kAvx2, kAvx512 };
 Kernel best_kernel() {
     __builtin_cpu_init();
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("bmi2"))
+        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
+        __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2"))
         return Kernel::kAvx512;
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2")) return Kernel::kAvx2;
     return Kernel::kScalar;
@@ -330,7 +424,8 @@ void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> st
 
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                  std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
-                 std::span<std::uint8_t> visited, TraceScratch& scratch, TraceKernel kernel) {
+                 std::span<std::uint8_t> visited, TraceScratch& scratch, TraceKernel kernel,
+                 LineEnds line_ends) {
     assert(starts.size() == ends.size() && occupied.size() == starts.size() &&
            visited.size() == starts.size());
     static const Kernel best = best_kernel();  // CPU features do not change while running
@@ -339,7 +434,8 @@ void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
     if (kernel == TraceKernel::kAvx2 && best != Kernel::kScalar) use = Kernel::kAvx2;
     switch (use) {
         case Kernel::kAvx512:
-            trace_lines_avx512(grid, starts, ends, occupied, visited, scratch);
+            trace_lines_avx512(grid, starts, ends, occupied, visited, scratch,
+                               line_ends == LineEnds::kSetBeforeDilation);
             break;
         case Kernel::kAvx2:
             trace_lines_avx2(grid, starts, ends, occupied, visited, scratch);

@@ -49,6 +49,15 @@ inline std::uint32_t visited_cells(std::uint32_t start, std::uint32_t end) {
 /// Scratch buffers of trace_lines(), kept between calls to avoid allocation.
 struct TraceScratch {
     std::vector<std::uint32_t> order;
+    std::vector<std::uint8_t> blocks;  // 2x2x2 block occupancy per cell (AVX-512 kernel)
+};
+
+/// What trace_lines() may assume about its lines.
+enum class LineEnds {
+    kAny,
+    /// Every start and end cell is a cell that was set before grid.dilate(): the start, its
+    /// successor and the end's predecessor then lie in the dilated grid, and are not looked up.
+    kSetBeforeDilation,
 };
 
 /// Which kernel trace_lines() runs: the widest the CPU has (default), or a narrower one (tests).
@@ -60,7 +69,7 @@ enum class TraceKernel { kBest, kAvx2, kScalar };
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                  std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
                  std::span<std::uint8_t> visited, TraceScratch& scratch,
-                 TraceKernel kernel = TraceKernel::kBest);
+                 TraceKernel kernel = TraceKernel::kBest, LineEnds line_ends = LineEnds::kAny);
 
 /// The portable kernel.
 void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,

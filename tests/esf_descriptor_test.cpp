@@ -129,6 +129,19 @@ TEST(EsfDescriptor, PoolGivesTheEstimatorsResultFromConcurrentCallers) {
     EXPECT_EQ(pool.compute(clouds[0]).descriptor, got[0]);
 }
 
+TEST(EsfDescriptor, PortableCodeGivesTheSimdKernelsOutput) {
+    const auto points = partial_cylinder(5000);
+    for (std::uint64_t seed : {0u, 1u, 99u}) {
+        esf::EsfOptions simd;
+        simd.seed = seed;
+        esf::EsfOptions portable = simd;
+        portable.simd = false;
+        const auto a = esf::compute_esf(points, simd), b = esf::compute_esf(points, portable);
+        EXPECT_EQ(a.descriptor, b.descriptor) << "seed " << seed;
+        EXPECT_EQ(a.attempts, b.attempts) << "seed " << seed;
+    }
+}
+
 TEST(EsfDescriptor, InvariantToTranslationAndScale) {
     const auto points = partial_cylinder(6000);
     const auto reference = esf::compute_esf(points).descriptor;
@@ -277,6 +290,39 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
     }
     for (std::size_t i = 0; i < n; ++i)
         ASSERT_EQ(expected_visited[i], esf::detail::visited_cells(starts[i], ends[i]));
+}
+
+// As a descriptor's lines: between cells set before the dilation, in a sparse grid whose empty
+// rows and grid borders are where the block look-ups of the AVX-512 kernel can go wrong.
+TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
+    std::mt19937 rng(11);
+    std::uniform_int_distribution<std::uint32_t> coord(0, 63), edge(0, 1);
+    esf::detail::VoxelGrid grid;
+    grid.clear();
+    std::vector<std::uint32_t> points;
+    for (int i = 0; i < 300; ++i) {
+        // Half of the points on a face of the grid, so that lines run along its borders.
+        std::uint32_t c[3] = {coord(rng), coord(rng), coord(rng)};
+        if (i % 2 == 0) c[i % 3] = 63 * edge(rng);
+        points.push_back(pack_cell(c[0], c[1], c[2]));
+        grid.set(points.back());
+    }
+    grid.dilate(64);
+    const std::size_t n = 20011;
+    std::vector<std::uint32_t> starts(n), ends(n);
+    std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+    for (std::size_t i = 0; i < n; ++i) starts[i] = points[pick(rng)], ends[i] = points[pick(rng)];
+    std::vector<std::uint16_t> expected(n), actual(n);
+    std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
+    esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
+    for (auto ends_hint : {esf::detail::LineEnds::kAny, esf::detail::LineEnds::kSetBeforeDilation})
+        for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx2}) {
+            esf::detail::TraceScratch scratch;
+            esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel,
+                                     ends_hint);
+            EXPECT_EQ(actual, expected);
+            EXPECT_EQ(actual_visited, expected_visited);
+        }
 }
 
 }  // namespace

@@ -56,8 +56,9 @@ fs::path temp_dir() {
 constexpr int kSamples = 4000;
 const std::vector<std::string> kShapes = {"bowl", "mug"};
 
-/// A database of one procedural mug and one bowl, 20 views each (view sphere level 0), trained
-/// once for the whole suite.
+/// A database of one procedural mug and one bowl, 80 views each (view sphere level 1, as the
+/// paper and `esf train` use), trained once for the whole suite. (With 20 views, a mug seen from
+/// the side away from its handle is taken for the bowl under some seeds.)
 class RecognizerTest : public ::testing::Test {
   protected:
     static void SetUpTestSuite() {
@@ -72,7 +73,7 @@ class RecognizerTest : public ::testing::Test {
         db_path_ = (root_ / "two.sqlite").string();
         esf::Database db(db_path_, esf::OpenMode::kWrite);
         esf::TrainingOptions options;
-        options.render.level = 0;
+        options.render.level = 1;
         options.esf.samples = kSamples;
         options.seed = 5;
         esf::train((root_ / "meshes").string(), db, options);
@@ -97,9 +98,10 @@ class RecognizerTest : public ::testing::Test {
     static inline std::map<std::string, esf::Mesh> meshes_;
 };
 
-// Directions that are none of the 20 level-0 cameras (face centres of the icosahedron).
+// Directions as far from the view sphere's cameras as they come: 17 to 20 degrees from the
+// nearest one (vertices and edge midpoints of the level-1 tessellation).
 const std::vector<Eigen::Vector3d> kHeldOut = {
-    {1.0, 0.2, 0.45}, {-0.3, 1.0, 0.2}, {-0.7, -0.6, 0.6}, {0.4, -1.0, -0.1}};
+    {0.95, 0.0, 0.59}, {0.0, 1.06, 0.0}, {-0.89, -0.55, 0.34}, {0.57, -0.92, 0.0}};
 
 TEST_F(RecognizerTest, LoadsTheDatabaseAndItsSettings) {
     const esf::Recognizer recognizer(db_path_);
@@ -113,7 +115,7 @@ TEST_F(RecognizerTest, LoadsTheDatabaseAndItsSettings) {
     EXPECT_EQ(info.models, 2u);
     EXPECT_EQ(info.categories, kShapes);
     EXPECT_EQ(info.views, info.rows);
-    EXPECT_GE(info.views, 30u);  // 40 rendered, thin edge-on views may be skipped
+    EXPECT_GE(info.views, 120u);  // 160 rendered, thin edge-on views may be skipped
     EXPECT_EQ(recognizer.classifier().labels().size(), info.views);
 }
 

@@ -28,7 +28,7 @@ inline constexpr int kEsfBlocks = 10;
 inline constexpr int kEsfSize = kEsfBins * kEsfBlocks;  // 640
 
 /// Descriptor version stored with databases; bump when the output of the default options changes.
-inline constexpr int kEsfVersion = 1;
+inline constexpr int kEsfVersion = 2;
 
 using EsfDescriptor = std::array<float, kEsfSize>;
 
@@ -36,8 +36,8 @@ using EsfDescriptor = std::array<float, kEsfSize>;
 const std::array<const char*, kEsfBlocks>& esf_block_names();
 
 enum class EsfSampler {
-    /// Counter-based generator (SplitMix64-seeded xoshiro256**): reproducible for a seed on
-    /// every machine and thread count; the fast path (bit-packed grid, SIMD line tracing).
+    /// 16 xoshiro128++ streams seeded by SplitMix64: reproducible for a seed on every machine
+    /// and thread count; the fast path (bit-packed grid, SIMD sampling and line tracing).
     kFast,
     /// glibc rand() model: bit for bit what pcl::ESFEstimation (PCL 1.13) computes after
     /// srand(seed). Slower; for validation against the reference.
@@ -56,6 +56,9 @@ struct EsfOptions {
     /// Attempts allowed per requested sample before the cloud is declared degenerate
     /// (PCL loops forever there). Rejections are rare on real clouds (< 1 %).
     int max_attempts_per_sample = 64;
+    /// Use the CPU's SIMD kernels (AVX-512, AVX2) where it has them. false runs the portable
+    /// code, which gives the same output bit for bit (for testing, or to rule the kernels out).
+    bool simd = true;
 };
 
 struct EsfResult {

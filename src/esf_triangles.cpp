@@ -1,0 +1,509 @@
+#include "esf_triangles.hpp"
+
+#include <immintrin.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <numbers>
+
+// GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// Vectors passed between this file's internal AVX-512 functions (same target, never exported).
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace esf::detail {
+
+void TriangleSet::resize(std::size_t count) {
+    samples = count;
+    angle_bins.resize(count + 16);  // + one block of slack for masked full-width stores
+    d2.resize(3 * count + 16);
+    d3.resize(count + 16);
+    line_start.resize(3 * count + 16);
+    line_end.resize(3 * count + 16);
+    max_d2 = max_d3 = 0.0f;
+}
+
+namespace {
+
+constexpr int kLanes = 16;
+constexpr int kTopBin = 63;
+// Line and triangle classes of the reference: a line is IN when at most one of its cells is
+// empty, OUT when at most 7 are occupied; a triangle is OUT when its three lines hold at most 21
+// occupied cells, IN when at most 3 of their cells are empty.
+constexpr int kLineOutMaxOccupied = 7;
+constexpr int kTriangleOutMaxOccupied = 21;
+constexpr int kTriangleInMaxEmpty = 3;
+constexpr int kTrashBin = 640;  // where the ratio histogram counts lines that are not MIXED
+
+// acos(x) = sqrt(1 - x) * (a0 + a1 x + ... + a7 x^7) on [0, 1] (A&S 4.4.46).
+constexpr float kAcos[8] = {1.5707963050f, -0.2145988016f, 0.0889789874f, -0.0501743046f,
+                            0.0308918810f, -0.0170881256f, 0.0066700901f, -0.0012624911f};
+constexpr float kBinsPerRadian = static_cast<float>(kTopBin / (std::numbers::pi / 2.0));
+
+inline std::uint64_t splitmix64(std::uint64_t& state) {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/// 16 xoshiro128++ streams (Blackman & Vigna), state word w of lane l in s[w][l].
+struct Streams {
+    alignas(64) std::uint32_t s[4][kLanes];
+
+    explicit Streams(std::uint64_t seed) {
+        std::uint64_t state = seed;
+        for (int l = 0; l < kLanes; ++l) {
+            const std::uint64_t a = splitmix64(state), b = splitmix64(state);
+            s[0][l] = static_cast<std::uint32_t>(a);
+            s[1][l] = static_cast<std::uint32_t>(a >> 32);
+            s[2][l] = static_cast<std::uint32_t>(b);
+            s[3][l] = static_cast<std::uint32_t>(b >> 32);
+            if ((s[0][l] | s[1][l] | s[2][l] | s[3][l]) == 0) s[0][l] = 1;  // never all zero
+        }
+    }
+    std::uint32_t next(int l) {
+        std::uint32_t &s0 = s[0][l], &s1 = s[1][l], &s2 = s[2][l], &s3 = s[3][l];
+        const std::uint32_t result = std::rotl(s0 + s3, 7) + s0;
+        const std::uint32_t t = s1 << 9;
+        s2 ^= s0;
+        s3 ^= s1;
+        s1 ^= s2;
+        s0 ^= s3;
+        s2 ^= t;
+        s3 = std::rotl(s3, 11);
+        return result;
+    }
+};
+
+/// Uniform index in [0, n) from 32 random bits (Lemire's multiply-shift).
+inline std::uint32_t bounded(std::uint32_t bits, std::uint32_t n) {
+    return static_cast<std::uint32_t>((std::uint64_t{bits} * n) >> 32);
+}
+
+/// One block of 16 attempts, lane by lane.
+struct Block {
+    std::uint32_t index[3][kLanes];
+    std::uint32_t cell[3][kLanes];
+    float a[kLanes], b[kLanes], c[kLanes], d3[kLanes];
+    std::uint32_t angle_bins[kLanes];
+    std::uint32_t accepted = 0;  // lane mask
+};
+
+void sample_block_scalar(Streams& streams, const PackedPoint* points, std::uint32_t count,
+                         float min_heron, Block& block) {
+    block.accepted = 0;
+    for (int l = 0; l < kLanes; ++l)
+        for (int k = 0; k < 3; ++k) block.index[k][l] = bounded(streams.next(l), count);
+    for (int l = 0; l < kLanes; ++l) {
+        const PackedPoint& p1 = points[block.index[0][l]];
+        const PackedPoint& p2 = points[block.index[1][l]];
+        const PackedPoint& p3 = points[block.index[2][l]];
+        const float x21 = p2.x - p1.x, y21 = p2.y - p1.y, z21 = p2.z - p1.z;
+        const float x31 = p3.x - p1.x, y31 = p3.y - p1.y, z31 = p3.z - p1.z;
+        const float x23 = p2.x - p3.x, y23 = p2.y - p3.y, z23 = p2.z - p3.z;
+        const float a = std::sqrt(x21 * x21 + y21 * y21 + z21 * z21);
+        const float b = std::sqrt(x31 * x31 + y31 * y31 + z31 * z31);
+        const float c = std::sqrt(x23 * x23 + y23 * y23 + z23 * z23);
+        const float s = (a + b + c) * 0.5f;
+        const float heron = s * (s - a) * (s - b) * (s - c);
+        const std::uint32_t i1 = block.index[0][l], i2 = block.index[1][l], i3 = block.index[2][l];
+        if (i1 == i2 || i1 == i3 || i2 == i3 || !(heron > min_heron)) continue;
+        const float cos1 = std::abs(x21 * x31 + y21 * y31 + z21 * z31) / (a * b);
+        const float cos2 = std::abs(x23 * x31 + y23 * y31 + z23 * z31) / (c * b);
+        const float cos3 = std::abs(x23 * x21 + y23 * y21 + z23 * z21) / (c * a);
+        block.accepted |= 1u << l;
+        block.a[l] = a, block.b[l] = b, block.c[l] = c;
+        block.d3[l] = std::sqrt(std::sqrt(heron));
+        block.angle_bins[l] = static_cast<std::uint32_t>(fast_angle_bin(cos1)) |
+                              static_cast<std::uint32_t>(fast_angle_bin(cos2)) << 8 |
+                              static_cast<std::uint32_t>(fast_angle_bin(cos3)) << 16;
+        block.cell[0][l] = p1.cell, block.cell[1][l] = p2.cell, block.cell[2][l] = p3.cell;
+    }
+}
+
+/// Appends the lanes of `keep` (in lane order) to the triangle set at `at`.
+void commit_scalar(const Block& block, std::uint32_t keep, std::size_t at, TriangleSet& set) {
+    const std::size_t s = set.samples;
+    for (int l = 0; l < kLanes; ++l) {
+        if (!(keep >> l & 1)) continue;
+        set.angle_bins[at] = block.angle_bins[l];
+        set.d2[at] = block.a[l], set.d2[s + at] = block.b[l], set.d2[2 * s + at] = block.c[l];
+        set.d3[at] = block.d3[l];
+        const std::uint32_t c1 = block.cell[0][l], c2 = block.cell[1][l], c3 = block.cell[2][l];
+        set.line_start[at] = c1, set.line_end[at] = c2;
+        set.line_start[s + at] = c1, set.line_end[s + at] = c3;
+        set.line_start[2 * s + at] = c2, set.line_end[2 * s + at] = c3;
+        set.max_d2 = std::max({set.max_d2, block.a[l], block.b[l], block.c[l]});
+        set.max_d3 = std::max(set.max_d3, block.d3[l]);
+        ++at;
+    }
+}
+
+/// The lowest `n` set bits of `mask`.
+inline std::uint32_t lowest_bits(std::uint32_t mask, int n) {
+    for (int excess = std::popcount(mask) - n; excess > 0; --excess)
+        mask &= ~(std::uint32_t{1} << (31 - std::countl_zero(mask)));
+    return mask;
+}
+
+#define ESF_TARGET_AVX512 \
+    __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx2,fma,bmi,bmi2")))
+
+ESF_TARGET_AVX512 inline __m512 dot16(__m512 ax, __m512 ay, __m512 az, __m512 bx, __m512 by,
+                                      __m512 bz) {
+    return _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(ax, bx), _mm512_mul_ps(ay, by)),
+                         _mm512_mul_ps(az, bz));
+}
+
+/// xoshiro128++ on all 16 lanes.
+ESF_TARGET_AVX512 inline __m512i next16(__m512i& s0, __m512i& s1, __m512i& s2, __m512i& s3) {
+    const __m512i result = _mm512_add_epi32(_mm512_rol_epi32(_mm512_add_epi32(s0, s3), 7), s0);
+    const __m512i t = _mm512_slli_epi32(s1, 9);
+    s2 = _mm512_xor_si512(s2, s0);
+    s3 = _mm512_xor_si512(s3, s1);
+    s1 = _mm512_xor_si512(s1, s2);
+    s0 = _mm512_xor_si512(s0, s3);
+    s2 = _mm512_xor_si512(s2, t);
+    s3 = _mm512_rol_epi32(s3, 11);
+    return result;
+}
+
+ESF_TARGET_AVX512 inline __m512i bounded16(__m512i bits, __m512i n) {
+    const __m512i even = _mm512_srli_epi64(_mm512_mul_epu32(bits, n), 32);
+    const __m512i odd = _mm512_mul_epu32(_mm512_srli_epi64(bits, 32), n);
+    return _mm512_mask_blend_epi32(static_cast<__mmask16>(0xAAAA), even, odd);
+}
+
+ESF_TARGET_AVX512 inline __m512 angle_bin16(__m512 c) {
+    const __m512 x = _mm512_min_ps(c, _mm512_set1_ps(1.0f));
+    __m512 p = _mm512_set1_ps(kAcos[7]);
+    for (int k = 6; k >= 0; --k) p = _mm512_fmadd_ps(p, x, _mm512_set1_ps(kAcos[k]));
+    const __m512 angle = _mm512_mul_ps(_mm512_sqrt_ps(_mm512_sub_ps(_mm512_set1_ps(1.0f), x)), p);
+    return _mm512_add_ps(_mm512_mul_ps(angle, _mm512_set1_ps(kBinsPerRadian)),
+                         _mm512_set1_ps(0.5f));
+}
+
+ESF_TARGET_AVX512 inline __m512i bin_of16(__m512 t) {
+    return _mm512_min_epi32(_mm512_cvttps_epi32(t), _mm512_set1_epi32(kTopBin));
+}
+
+/// The x, y, z and cell of points[index[l]] for the 16 lanes (4x4 transposes of 16-byte loads).
+ESF_TARGET_AVX512 inline void load16(const PackedPoint* points, const std::uint32_t* index,
+                                     __m512& x, __m512& y, __m512& z, __m512i& cell) {
+    __m512 r[4];
+    for (int j = 0; j < 4; ++j) {
+        r[j] = _mm512_castps128_ps512(_mm_load_ps(&points[index[j]].x));
+        r[j] = _mm512_insertf32x4(r[j], _mm_load_ps(&points[index[j + 4]].x), 1);
+        r[j] = _mm512_insertf32x4(r[j], _mm_load_ps(&points[index[j + 8]].x), 2);
+        r[j] = _mm512_insertf32x4(r[j], _mm_load_ps(&points[index[j + 12]].x), 3);
+    }
+    const __m512d t0 = _mm512_castps_pd(_mm512_unpacklo_ps(r[0], r[1]));  // x0 x1 y0 y1
+    const __m512d t1 = _mm512_castps_pd(_mm512_unpackhi_ps(r[0], r[1]));  // z0 z1 c0 c1
+    const __m512d t2 = _mm512_castps_pd(_mm512_unpacklo_ps(r[2], r[3]));
+    const __m512d t3 = _mm512_castps_pd(_mm512_unpackhi_ps(r[2], r[3]));
+    x = _mm512_castpd_ps(_mm512_unpacklo_pd(t0, t2));
+    y = _mm512_castpd_ps(_mm512_unpackhi_pd(t0, t2));
+    z = _mm512_castpd_ps(_mm512_unpacklo_pd(t1, t3));
+    cell = _mm512_castpd_si512(_mm512_unpackhi_pd(t1, t3));
+}
+
+/// Stores the lanes of `keep`, in order, to dst[0 .. popcount(keep)).
+ESF_TARGET_AVX512 inline void put16(std::uint32_t* dst, __mmask16 keep, __mmask16 out, __m512i v) {
+    _mm512_mask_storeu_epi32(dst, out, _mm512_maskz_compress_epi32(keep, v));
+}
+ESF_TARGET_AVX512 inline void put16(float* dst, __mmask16 keep, __mmask16 out, __m512 v) {
+    _mm512_mask_storeu_ps(dst, out, _mm512_maskz_compress_ps(keep, v));
+}
+
+ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint32_t count,
+                                            std::uint64_t seed, std::size_t max_attempts,
+                                            float min_heron, TriangleSet& set) {
+    Streams streams(seed);
+    __m512i s0 = _mm512_load_si512(streams.s[0]), s1 = _mm512_load_si512(streams.s[1]);
+    __m512i s2 = _mm512_load_si512(streams.s[2]), s3 = _mm512_load_si512(streams.s[3]);
+    const __m512i n = _mm512_set1_epi32(static_cast<int>(count));
+    const __m512 half = _mm512_set1_ps(0.5f), heron_min = _mm512_set1_ps(min_heron);
+    const __m512 sign = _mm512_set1_ps(-0.0f);
+    __m512 max_d2 = _mm512_setzero_ps(), max_d3 = _mm512_setzero_ps();
+    const std::size_t samples = set.samples;
+    SampleCount done;
+    alignas(64) std::uint32_t index[3][kLanes];
+    while (done.accepted < samples && done.attempts < max_attempts) {
+        const __m512i i1 = bounded16(next16(s0, s1, s2, s3), n);
+        const __m512i i2 = bounded16(next16(s0, s1, s2, s3), n);
+        const __m512i i3 = bounded16(next16(s0, s1, s2, s3), n);
+        _mm512_store_si512(index[0], i1);
+        _mm512_store_si512(index[1], i2);
+        _mm512_store_si512(index[2], i3);
+        __m512 x1, y1, z1, x2, y2, z2, x3, y3, z3;
+        __m512i c1, c2, c3;
+        load16(points, index[0], x1, y1, z1, c1);
+        load16(points, index[1], x2, y2, z2, c2);
+        load16(points, index[2], x3, y3, z3, c3);
+        const __m512 x21 = _mm512_sub_ps(x2, x1), y21 = _mm512_sub_ps(y2, y1),
+                     z21 = _mm512_sub_ps(z2, z1);
+        const __m512 x31 = _mm512_sub_ps(x3, x1), y31 = _mm512_sub_ps(y3, y1),
+                     z31 = _mm512_sub_ps(z3, z1);
+        const __m512 x23 = _mm512_sub_ps(x2, x3), y23 = _mm512_sub_ps(y2, y3),
+                     z23 = _mm512_sub_ps(z2, z3);
+        const __m512 a = _mm512_sqrt_ps(dot16(x21, y21, z21, x21, y21, z21));
+        const __m512 b = _mm512_sqrt_ps(dot16(x31, y31, z31, x31, y31, z31));
+        const __m512 c = _mm512_sqrt_ps(dot16(x23, y23, z23, x23, y23, z23));
+        const __m512 s = _mm512_mul_ps(_mm512_add_ps(_mm512_add_ps(a, b), c), half);
+        const __m512 heron =
+            _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(s, _mm512_sub_ps(s, a)), _mm512_sub_ps(s, b)),
+                          _mm512_sub_ps(s, c));
+        __mmask16 keep = _mm512_cmp_ps_mask(heron, heron_min, _CMP_GT_OQ) &
+                         _mm512_cmpneq_epi32_mask(i1, i2) & _mm512_cmpneq_epi32_mask(i1, i3) &
+                         _mm512_cmpneq_epi32_mask(i2, i3);
+        const std::size_t usable = std::min<std::size_t>(kLanes, max_attempts - done.attempts);
+        if (usable < kLanes) keep &= static_cast<__mmask16>((1u << usable) - 1u);
+        const std::size_t need = samples - done.accepted;
+        int got = std::popcount(static_cast<unsigned>(keep));
+        if (static_cast<std::size_t>(got) >= need) {
+            keep = static_cast<__mmask16>(lowest_bits(keep, static_cast<int>(need)));
+            got = static_cast<int>(need);
+            done.attempts += static_cast<std::size_t>(32 - std::countl_zero(unsigned{keep}));
+        } else {
+            done.attempts += usable;
+        }
+        if (got == 0) continue;
+        const __m512 cos1 = _mm512_div_ps(
+            _mm512_andnot_ps(sign, dot16(x21, y21, z21, x31, y31, z31)), _mm512_mul_ps(a, b));
+        const __m512 cos2 = _mm512_div_ps(
+            _mm512_andnot_ps(sign, dot16(x23, y23, z23, x31, y31, z31)), _mm512_mul_ps(c, b));
+        const __m512 cos3 = _mm512_div_ps(
+            _mm512_andnot_ps(sign, dot16(x23, y23, z23, x21, y21, z21)), _mm512_mul_ps(c, a));
+        const __m512i bins =
+            _mm512_or_si512(_mm512_or_si512(bin_of16(angle_bin16(cos1)),
+                                            _mm512_slli_epi32(bin_of16(angle_bin16(cos2)), 8)),
+                            _mm512_slli_epi32(bin_of16(angle_bin16(cos3)), 16));
+        const __m512 d3 = _mm512_sqrt_ps(_mm512_sqrt_ps(heron));
+        const std::size_t at = done.accepted;
+        const __mmask16 out = static_cast<__mmask16>((1u << got) - 1u);
+        put16(&set.angle_bins[at], keep, out, bins);
+        put16(&set.d2[at], keep, out, a);
+        put16(&set.d2[samples + at], keep, out, b);
+        put16(&set.d2[2 * samples + at], keep, out, c);
+        put16(&set.d3[at], keep, out, d3);
+        put16(&set.line_start[at], keep, out, c1);
+        put16(&set.line_end[at], keep, out, c2);
+        put16(&set.line_start[samples + at], keep, out, c1);
+        put16(&set.line_end[samples + at], keep, out, c3);
+        put16(&set.line_start[2 * samples + at], keep, out, c2);
+        put16(&set.line_end[2 * samples + at], keep, out, c3);
+        max_d2 = _mm512_mask_max_ps(max_d2, keep, max_d2, _mm512_max_ps(_mm512_max_ps(a, b), c));
+        max_d3 = _mm512_mask_max_ps(max_d3, keep, max_d3, d3);
+        done.accepted += static_cast<std::size_t>(got);
+    }
+    set.max_d2 = _mm512_reduce_max_ps(max_d2);
+    set.max_d3 = _mm512_reduce_max_ps(max_d3);
+    return done;
+}
+
+bool cpu_has_avx512() {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+           __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
+           __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi") &&
+           __builtin_cpu_supports("bmi2");
+}
+
+bool use_avx512(bool simd) {
+    static const bool available = cpu_has_avx512();  // CPU features do not change while running
+    return simd && available;
+}
+
+/// Histogram positions of 16 triangles: bins[slot][lane] into a 641-bin array (640: discard),
+/// slots 0-2 D2 of the lines, 3-5 their ratio, 6 D3, 7-9 A3 with weights weight[0..2].
+struct HistogramBlock {
+    alignas(64) std::uint32_t bins[10][kLanes];
+    alignas(64) std::uint32_t weight[3][kLanes];
+};
+
+inline int round_bin(float x) { return static_cast<int>(x + 0.5f); }
+
+void histogram_block_scalar(const TriangleSet& set, const std::uint16_t* occupied,
+                            const std::uint8_t* visited, std::size_t first, std::size_t lanes,
+                            bool pcl_division, float d2_scale, float d3_scale,
+                            HistogramBlock& block) {
+    const std::size_t s = set.samples;
+    for (std::size_t l = 0; l < lanes; ++l) {
+        const std::size_t t = first + l;
+        int o[3], v[3];
+        for (int k = 0; k < 3; ++k) {
+            o[k] = occupied[static_cast<std::size_t>(k) * s + t];
+            v[k] = visited[static_cast<std::size_t>(k) * s + t];
+            const bool in = o[k] + 1 >= v[k];
+            const bool out = !in && o[k] <= kLineOutMaxOccupied;
+            const bool mixed = !in && !out;
+            const float d = set.d2[static_cast<std::size_t>(k) * s + t];
+            const int bin =
+                std::min(round_bin(pcl_division ? d / set.max_d2 * static_cast<float>(kTopBin)
+                                                : d * d2_scale),
+                         kTopBin);
+            block.bins[k][l] = static_cast<std::uint32_t>((6 + (out     ? 1
+                                                                : mixed ? 2
+                                                                        : 0)) *
+                                                              64 +
+                                                          bin);
+            const float ratio = static_cast<float>(o[k]) / static_cast<float>(v[k]);
+            block.bins[3 + k][l] =
+                mixed ? static_cast<std::uint32_t>(9 * 64 +
+                                                   round_bin(ratio * static_cast<float>(kTopBin)))
+                      : kTrashBin;
+        }
+        const int occupied_sum = o[0] + o[1] + o[2], visited_sum = v[0] + v[1] + v[2];
+        const bool out = occupied_sum <= kTriangleOutMaxOccupied;
+        const bool in = !out && visited_sum - occupied_sum <= kTriangleInMaxEmpty;
+        const int cls = out ? 1 : in ? 0 : 2;
+        const float d3 = set.d3[t];
+        const int d3_bin = std::min(
+            round_bin(pcl_division ? d3 / set.max_d3 * static_cast<float>(kTopBin) : d3 * d3_scale),
+            kTopBin);
+        block.bins[6][l] = static_cast<std::uint32_t>((3 + cls) * 64 + d3_bin);
+        const std::uint32_t angles = set.angle_bins[t];
+        for (int k = 0; k < 3; ++k)
+            block.bins[7 + k][l] = static_cast<std::uint32_t>(cls * 64) + (angles >> (8 * k) & 255);
+        // Each angle is weighted by the visited cells of the line opposite to it.
+        block.weight[0][l] = static_cast<std::uint32_t>(v[2]);
+        block.weight[1][l] = static_cast<std::uint32_t>(v[0]);
+        block.weight[2][l] = static_cast<std::uint32_t>(v[1]);
+    }
+}
+
+ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std::uint16_t* occupied,
+                                              const std::uint8_t* visited, std::size_t t,
+                                              float d2_scale, float d3_scale,
+                                              HistogramBlock& block) {
+    const std::size_t s = set.samples;
+    const __m512i one = _mm512_set1_epi32(1), top = _mm512_set1_epi32(kTopBin);
+    const __m512 half = _mm512_set1_ps(0.5f), top_f = _mm512_set1_ps(static_cast<float>(kTopBin));
+    __m512i o[3], v[3];
+    for (int k = 0; k < 3; ++k) {
+        const std::size_t at = static_cast<std::size_t>(k) * s + t;
+        o[k] = _mm512_cvtepu16_epi32(
+            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(occupied + at)));
+        v[k] =
+            _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(visited + at)));
+        const __mmask16 in = _mm512_cmpge_epi32_mask(_mm512_add_epi32(o[k], one), v[k]);
+        const __mmask16 out = static_cast<__mmask16>(
+            ~in & _mm512_cmple_epi32_mask(o[k], _mm512_set1_epi32(kLineOutMaxOccupied)));
+        const __mmask16 mixed = static_cast<__mmask16>(~in & ~out);
+        const __m512 d = _mm512_loadu_ps(&set.d2[at]);
+        const __m512i bin = _mm512_min_epi32(
+            _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(d, _mm512_set1_ps(d2_scale)), half)),
+            top);
+        __m512i block_id = _mm512_set1_epi32(6 * 64);
+        block_id = _mm512_mask_mov_epi32(block_id, out, _mm512_set1_epi32(7 * 64));
+        block_id = _mm512_mask_mov_epi32(block_id, mixed, _mm512_set1_epi32(8 * 64));
+        _mm512_store_si512(block.bins[k], _mm512_add_epi32(block_id, bin));
+        const __m512 ratio = _mm512_div_ps(_mm512_cvtepi32_ps(o[k]), _mm512_cvtepi32_ps(v[k]));
+        const __m512i ratio_bin =
+            _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(ratio, top_f), half));
+        _mm512_store_si512(block.bins[3 + k],
+                           _mm512_mask_add_epi32(_mm512_set1_epi32(kTrashBin), mixed, ratio_bin,
+                                                 _mm512_set1_epi32(9 * 64)));
+    }
+    const __m512i occupied_sum = _mm512_add_epi32(_mm512_add_epi32(o[0], o[1]), o[2]);
+    const __m512i visited_sum = _mm512_add_epi32(_mm512_add_epi32(v[0], v[1]), v[2]);
+    const __mmask16 out =
+        _mm512_cmple_epi32_mask(occupied_sum, _mm512_set1_epi32(kTriangleOutMaxOccupied));
+    const __mmask16 in = static_cast<__mmask16>(
+        ~out & _mm512_cmple_epi32_mask(_mm512_sub_epi32(visited_sum, occupied_sum),
+                                       _mm512_set1_epi32(kTriangleInMaxEmpty)));
+    __m512i cls = _mm512_set1_epi32(2 * 64);
+    cls = _mm512_mask_mov_epi32(cls, out, _mm512_set1_epi32(64));
+    cls = _mm512_mask_mov_epi32(cls, in, _mm512_setzero_si512());
+    const __m512 d3 = _mm512_loadu_ps(&set.d3[t]);
+    const __m512i d3_bin = _mm512_min_epi32(
+        _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(d3, _mm512_set1_ps(d3_scale)), half)), top);
+    _mm512_store_si512(block.bins[6],
+                       _mm512_add_epi32(_mm512_add_epi32(cls, _mm512_set1_epi32(3 * 64)), d3_bin));
+    const __m512i angles = _mm512_loadu_si512(&set.angle_bins[t]);
+    const __m512i byte = _mm512_set1_epi32(255);
+    for (int k = 0; k < 3; ++k)
+        _mm512_store_si512(
+            block.bins[7 + k],
+            _mm512_add_epi32(cls, _mm512_and_si512(_mm512_srli_epi32(angles, 8 * k), byte)));
+    _mm512_store_si512(block.weight[0], v[2]);
+    _mm512_store_si512(block.weight[1], v[0]);
+    _mm512_store_si512(block.weight[2], v[1]);
+}
+
+}  // namespace
+
+int fast_angle_bin(float c) {
+    const float x = std::min(c, 1.0f);
+    float p = kAcos[7];
+    for (int k = 6; k >= 0; --k) p = std::fma(p, x, kAcos[k]);
+    const float angle = std::sqrt(1.0f - x) * p;
+    return std::min(static_cast<int>(angle * kBinsPerRadian + 0.5f), kTopBin);
+}
+
+SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count,
+                                  std::uint64_t seed, std::size_t max_attempts, float min_heron,
+                                  bool simd, TriangleSet& set) {
+    if (use_avx512(simd)) return sample_avx512(points, count, seed, max_attempts, min_heron, set);
+    Streams streams(seed);
+    Block block;
+    SampleCount done;
+    while (done.accepted < set.samples && done.attempts < max_attempts) {
+        sample_block_scalar(streams, points, count, min_heron, block);
+        std::uint32_t keep = block.accepted;
+        const std::size_t usable = std::min<std::size_t>(kLanes, max_attempts - done.attempts);
+        if (usable < kLanes) keep &= (1u << usable) - 1u;
+        const std::size_t need = set.samples - done.accepted;
+        int got = std::popcount(keep);
+        if (static_cast<std::size_t>(got) >= need) {
+            keep = lowest_bits(keep, static_cast<int>(need));
+            got = static_cast<int>(need);
+            done.attempts += static_cast<std::size_t>(32 - std::countl_zero(keep));
+        } else {
+            done.attempts += usable;
+        }
+        commit_scalar(block, keep, done.accepted, set);
+        done.accepted += static_cast<std::size_t>(got);
+    }
+    return done;
+}
+
+EsfCounts histogram_triangles(const TriangleSet& set, const std::uint16_t* occupied,
+                              const std::uint8_t* visited, bool pcl_division, bool simd) {
+    // Four interleaved copies (lane l counts into copy l % 4), summed at the end: consecutive
+    // increments of one bin then do not wait on each other's stores.
+    constexpr int kCopies = 4;
+    std::uint32_t copies[kCopies][kTrashBin + 1] = {};
+    // The fast sampler multiplies by the reciprocal of the maximum (a last-bit difference at a
+    // bin border, far below the sampling noise).
+    const float d2_scale = static_cast<float>(kTopBin) / set.max_d2;
+    const float d3_scale = static_cast<float>(kTopBin) / set.max_d3;
+    const bool vector = use_avx512(simd) && !pcl_division;
+    HistogramBlock block;
+    for (std::size_t first = 0; first < set.samples; first += kLanes) {
+        const std::size_t lanes = std::min<std::size_t>(kLanes, set.samples - first);
+        if (vector && lanes == kLanes)
+            histogram_block_avx512(set, occupied, visited, first, d2_scale, d3_scale, block);
+        else
+            histogram_block_scalar(set, occupied, visited, first, lanes, pcl_division, d2_scale,
+                                   d3_scale, block);
+        for (std::size_t l = 0; l < lanes; ++l) {
+            std::uint32_t* h = copies[l % kCopies];
+            for (int k = 0; k < 7; ++k) ++h[block.bins[k][l]];
+            for (int k = 0; k < 3; ++k) h[block.bins[7 + k][l]] += block.weight[k][l];
+        }
+    }
+    EsfCounts counts{};
+    for (int b = 0; b < 10; ++b)
+        for (int i = 0; i < 64; ++i) {
+            std::uint32_t total = 0;
+            for (const auto& copy : copies) total += copy[b * 64 + i];
+            counts[static_cast<std::size_t>(b)][static_cast<std::size_t>(i)] = total;
+        }
+    return counts;
+}
+
+}  // namespace esf::detail

@@ -1,0 +1,60 @@
+#pragma once
+// Internal: the random triangles of the ESF descriptor (Sec. III-C) and their ten histograms.
+//
+// The fast sampler draws attempts in blocks of 16, one per lane of 16 xoshiro128++ streams
+// (seeded from the one 64-bit seed by SplitMix64): attempt 16 b + l takes three draws of stream
+// l. The AVX-512 kernel and the portable code perform the same float operations in the same
+// order, so both give the same triangles, bit for bit, on every machine.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace esf::detail {
+
+/// A point of the fast sampler: scaled coordinates and its cell (pack_cell()).
+struct alignas(16) PackedPoint {
+    float x, y, z;
+    std::uint32_t cell;
+};
+
+/// Accepted triangles, structure of arrays. Line k of triangle t (k = 0: p1p2, 1: p1p3,
+/// 2: p2p3) is entry k * samples + t of the per-line arrays.
+struct TriangleSet {
+    std::size_t samples = 0;
+    std::vector<std::uint32_t> angle_bins;  // A3 bins at p1, p3, p2: b0 | b1 << 8 | b2 << 16
+    std::vector<float> d2;                  // per line: its length in grid units
+    std::vector<float> d3;                  // per triangle: sqrt(area)
+    std::vector<std::uint32_t> line_start, line_end;  // per line: cells
+    float max_d2 = 0.0f, max_d3 = 0.0f;
+
+    void resize(std::size_t count);
+};
+
+/// Outcome of sample_triangles_fast().
+struct SampleCount {
+    std::size_t accepted = 0;
+    std::size_t attempts = 0;
+};
+
+/// Draws triangles from `count` points (plus one readable padding point after them) until
+/// `triangles.samples` are accepted or `max_attempts` are spent. A triple is rejected when two
+/// indices coincide or its Heron product s(s-a)(s-b)(s-c) is at most `min_heron`.
+SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count,
+                                  std::uint64_t seed, std::size_t max_attempts, float min_heron,
+                                  bool simd, TriangleSet& triangles);
+
+/// A3 bin of an angle with |cos| = c, round(acos(c) / (pi/2) * 63), from a polynomial acos
+/// (Abramowitz & Stegun 4.4.46, error 2e-8): the fast sampler's angle binning.
+int fast_angle_bin(float c);
+
+/// The ten histograms as integer counts (A3 counts are weighted by the visited cells of the
+/// line opposite to the angle), from the triangles and the occupied / visited cells of their
+/// lines. `pcl_division`: bin D2 and D3 values as the reference does (d / max * 63) rather than
+/// by multiplying with 63 / max.
+using EsfCounts = std::array<std::array<std::uint32_t, 64>, 10>;
+EsfCounts histogram_triangles(const TriangleSet& triangles, const std::uint16_t* occupied,
+                              const std::uint8_t* visited, bool pcl_division, bool simd);
+
+}  // namespace esf::detail
