@@ -11,11 +11,13 @@
 
 #include "esf/glibc_random.hpp"
 #include "esf/parallel.hpp"
+#include "esf_points.hpp"
 #include "esf_trace.hpp"
 #include "esf_triangles.hpp"
 
 namespace esf {
 
+using detail::cell_of;
 using detail::kGridSide;
 using detail::pack_cell;
 
@@ -30,16 +32,6 @@ constexpr float kMinHeronProduct = 0.001f;  // s(s-a)(s-b)(s-c) in grid units (s
 inline int round_bin(float x) {
     assert(x >= 0.0f);
     return static_cast<int>(x + 0.5f);
-}
-
-/// Cell index of a scaled coordinate (reference: floor(v) + h if v < 0, else ceil(v) + h - 1),
-/// clamped to the grid (the reference reads outside it when rounding puts a point at 32.00001).
-/// |v| <= 32, so floor and ceil come from truncation.
-inline std::uint32_t cell_of(float v, int half) {
-    const int truncated = static_cast<int>(v);
-    const bool fractional = static_cast<float>(truncated) != v;
-    const int c = v < 0.0f ? truncated - fractional + half : truncated + fractional + half - 1;
-    return static_cast<std::uint32_t>(std::clamp(c, 0, 2 * half - 1));
 }
 
 }  // namespace
@@ -90,38 +82,6 @@ EsfEstimator::EsfEstimator(EsfEstimator&&) noexcept = default;
 EsfEstimator& EsfEstimator::operator=(EsfEstimator&&) noexcept = default;
 
 namespace {
-
-/// Centring and scaling of the fast sampler: the farthest point lands at radius `half`
-/// (Sec. III-A: translation and scale invariance).
-struct Normalisation {
-    double cx = 0.0, cy = 0.0, cz = 0.0, scale = 0.0;
-};
-
-/// False when all points coincide.
-bool fast_normalisation(std::span<const Eigen::Vector3f> in, int half, Normalisation& out) {
-    // Two accumulators per axis: the additions of one chain do not wait on each other.
-    double sum[2][3] = {};
-    const std::size_t n = in.size();
-    for (std::size_t i = 0; i + 1 < n; i += 2)
-        for (int r = 0; r < 2; ++r)
-            for (int k = 0; k < 3; ++k) sum[r][k] += in[i + static_cast<std::size_t>(r)][k];
-    if (n % 2 == 1)
-        for (int k = 0; k < 3; ++k) sum[0][k] += in[n - 1][k];
-    const double count = static_cast<double>(n);
-    out.cx = (sum[0][0] + sum[1][0]) / count;
-    out.cy = (sum[0][1] + sum[1][1]) / count;
-    out.cz = (sum[0][2] + sum[1][2]) / count;
-    double radius2[2] = {0.0, 0.0};
-    for (std::size_t i = 0; i < n; ++i) {
-        const double x = in[i].x() - out.cx, y = in[i].y() - out.cy, z = in[i].z() - out.cz;
-        double& r = radius2[i % 2];
-        r = std::max(r, x * x + y * y + z * z);
-    }
-    const double largest = std::max(radius2[0], radius2[1]);
-    if (!(largest > 0.0) || !std::isfinite(largest)) return false;
-    out.scale = half / std::sqrt(largest);
-    return true;
-}
 
 /// The reference's float arithmetic (compute3DCentroid, demeanPointCloud, scale 1/R * 32).
 bool normalise_pcl(std::span<const Eigen::Vector3f> in, Points& out) {
@@ -268,11 +228,11 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         return std::invalid_argument("degenerate cloud: all " + std::to_string(points.size()) +
                                      " points lie on one line");
     };
-    Normalisation normalisation;
+    detail::Normalisation normalisation;
     if (pcl) {
         if (!normalise_pcl(points, ws.scaled)) throw identical();
         if (collinear(points)) throw on_one_line();
-    } else if (!fast_normalisation(points, half, normalisation)) {
+    } else if (!detail::normalise_points(points, half, opt.simd, normalisation)) {
         throw identical();
     }
 
@@ -290,40 +250,8 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     } else {
         // One pass: scaled point, its cell, the grid and the moments for the collinearity test
         // (the scaled points are centred, so raw moments lose nothing).
-        ws.packed.resize(n + 1);  // + a readable padding point for the 16-byte loads
-        const Normalisation& t = normalisation;
-        double sx = 0.0, sy = 0.0, sz = 0.0, xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0,
-               zz = 0.0;
-        // Consecutive points of a scan mostly fall into one grid word: set its bits at once.
-        std::uint32_t word = 0;
-        std::uint64_t bits = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            const auto& q = points[i];
-            const auto x = static_cast<float>((q.x() - t.cx) * t.scale);
-            const auto y = static_cast<float>((q.y() - t.cy) * t.scale);
-            const auto z = static_cast<float>((q.z() - t.cz) * t.scale);
-            const std::uint32_t cell =
-                pack_cell(cell_of(x, half), cell_of(y, half), cell_of(z, half));
-            ws.packed[i] = {x, y, z, cell};
-            if (cell >> 6 != word) {
-                ws.grid.words[word] |= bits;
-                word = cell >> 6;
-                bits = 0;
-            }
-            bits |= std::uint64_t{1} << (cell & 63);
-            const double dx = x, dy = y, dz = z;
-            sx += dx, sy += dy, sz += dz;
-            xx += dx * dx, xy += dx * dy, xz += dx * dz;
-            yy += dy * dy, yz += dy * dz, zz += dz * dz;
-        }
-        ws.grid.words[word] |= bits;
-        ws.packed[n] = {};
-        const double count = static_cast<double>(n);
-        const double mx = sx / count, my = sy / count, mz = sz / count;
-        Eigen::Matrix3d covariance;
-        covariance << xx - count * mx * mx, xy - count * mx * my, xz - count * mx * mz,
-            xy - count * mx * my, yy - count * my * my, yz - count * my * mz, xz - count * mx * mz,
-            yz - count * my * mz, zz - count * mz * mz;
+        const Eigen::Matrix3d covariance = detail::voxelise_points(
+            points, normalisation, half, opt.simd, ws.packed, ws.cells, ws.grid);
         if (collinear(covariance)) throw on_one_line();
     }
     ws.grid.dilate(opt.grid_size);
