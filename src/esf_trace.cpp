@@ -3,6 +3,7 @@
 #include <immintrin.h>
 
 // GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // Vectors passed between this file's internal AVX-512 functions (same target, never exported).
 #pragma GCC diagnostic ignored "-Wpsabi"
@@ -299,23 +300,39 @@ ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
     const auto* end32 = reinterpret_cast<const int*>(ends.data());
     const std::size_t count = starts.size();
     const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
-    for (std::size_t group = 0; group < count; group += 16) {
-        const std::size_t size = std::min<std::size_t>(16, count - group);
-        const __mmask16 live = static_cast<__mmask16>((1u << size) - 1u);
-        const __m512i ids = _mm512_maskz_loadu_epi32(live, scratch.order.data() + group);
-        const __m512i zero = _mm512_setzero_si512();
-        PairLanes lanes =
-            setup_pairs(_mm512_mask_i32gather_epi32(zero, live, ids, start32, 4),
-                        _mm512_mask_i32gather_epi32(zero, live, ids, end32, 4), skip_known);
-        const int shortest = visited[scratch.order[group]] - end_skip;
-        const int longest = visited[scratch.order[group + size - 1]] - end_skip;
+    const __m512i zero = _mm512_setzero_si512();
+    // Two groups of 16 lines at once: their gathers overlap, and a loop serves 32 lines.
+    constexpr std::size_t kGroup = 32;
+    for (std::size_t group = 0; group < count; group += kGroup) {
+        const std::size_t size = std::min(kGroup, count - group);
+        const std::size_t size_a = std::min<std::size_t>(16, size), size_b = size - size_a;
+        const auto live_a = static_cast<__mmask16>((1u << size_a) - 1u);
+        const auto live_b = static_cast<__mmask16>((1u << size_b) - 1u);
+        const std::uint32_t* ids = scratch.order.data() + group;
+        const __m512i ids_a = _mm512_maskz_loadu_epi32(live_a, ids);
+        const __m512i ids_b = _mm512_maskz_loadu_epi32(live_b, ids + 16);
+        PairLanes a =
+            setup_pairs(_mm512_mask_i32gather_epi32(zero, live_a, ids_a, start32, 4),
+                        _mm512_mask_i32gather_epi32(zero, live_a, ids_a, end32, 4), skip_known);
+        PairLanes b =
+            setup_pairs(_mm512_mask_i32gather_epi32(zero, live_b, ids_b, start32, 4),
+                        _mm512_mask_i32gather_epi32(zero, live_b, ids_b, end32, 4), skip_known);
+        const int shortest = visited[ids[0]] - end_skip;
+        const int longest = visited[ids[size - 1]] - end_skip;
         int i = first_cell;
-        for (; i + 1 < shortest; i += 2) trace_pair<false>(lanes, blocks, i);
-        for (; i < longest; i += 2) trace_pair<true>(lanes, blocks, i);
-        alignas(64) std::uint32_t result[16];
-        _mm512_store_si512(result, lanes.occupied);
+        for (; i + 1 < shortest; i += 2) {
+            trace_pair<false>(a, blocks, i);
+            trace_pair<false>(b, blocks, i);
+        }
+        for (; i < longest; i += 2) {
+            trace_pair<true>(a, blocks, i);
+            trace_pair<true>(b, blocks, i);
+        }
+        alignas(64) std::uint32_t result[kGroup];
+        _mm512_store_si512(result, a.occupied);
+        _mm512_store_si512(result + 16, b.occupied);
         for (std::size_t k = 0; k < size; ++k)
-            occupied[scratch.order[group + k]] = static_cast<std::uint16_t>(result[k]);
+            occupied[ids[k]] = static_cast<std::uint16_t>(result[k]);
     }
 }
 
