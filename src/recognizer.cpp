@@ -177,7 +177,7 @@ int descriptor_version(const std::string& name) {
     if (std::find(names.begin(), names.end(), name) == names.end())
         throw std::invalid_argument("unknown descriptor '" + name + "' (this build knows " +
                                     joined(names) + ")");
-    return name == "esf" ? kEsfVersion : 1;
+    return stored_descriptor_version(name);
 }
 
 QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind) {

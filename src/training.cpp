@@ -464,7 +464,7 @@ Settings training_settings(const TrainingOptions& options, bool rescale_non_metr
         const auto descriptor = make_descriptor(options.descriptor, d);
         settings = {
             {"descriptor", options.descriptor},
-            {"descriptor_version", std::int64_t{kBaselineDescriptorVersion}},
+            {"descriptor_version", std::int64_t{stored_descriptor_version(options.descriptor)}},
             {"descriptor_dimension", std::int64_t{descriptor->info().dimension}},
             {"descriptor_samples", std::int64_t{d.samples}},
             {"descriptor_leaf_factor", static_cast<double>(d.leaf_factor)},
@@ -526,8 +526,8 @@ TrainingResult train(const std::string& root, Database& database, const Training
         database.add_descriptor_kind({descriptor_name, kEsfVersion, kEsfSize});
     } else {
         baseline = make_descriptor(descriptor_name, options.descriptor_options);
-        database.add_descriptor_kind(
-            {descriptor_name, kBaselineDescriptorVersion, baseline->info().dimension});
+        database.add_descriptor_kind({descriptor_name, stored_descriptor_version(descriptor_name),
+                                      baseline->info().dimension});
     }
 
     TrainingResult result;

@@ -47,9 +47,19 @@
 #include <string>
 #include <vector>
 
+#include "esf/esf_descriptor.hpp"
 #include "esf/point_cloud.hpp"
 
 namespace esf {
+
+/// The version train() stores for a descriptor: kEsfVersion for "esf" and for "sdvs" and "d2"
+/// (blocks of ESF's sampler), kBaselineDescriptorVersion for the others (what Recognizer's
+/// descriptor_version() expects).
+inline constexpr int kBaselineDescriptorVersion = 1;
+inline int stored_descriptor_version(const std::string& name) {
+    return name == "esf" || name == "sdvs" || name == "d2" ? kEsfVersion
+                                                           : kBaselineDescriptorVersion;
+}
 
 /// What a descriptor computes.
 struct DescriptorInfo {

@@ -57,8 +57,8 @@ struct QuerySetup {
     DescriptorOptions options;
 };
 
-/// The descriptor version this build computes for `name`: kEsfVersion for "esf", 1 for the
-/// baselines. Throws std::invalid_argument for a name make_descriptor() does not know.
+/// The descriptor version this build computes for `name`: stored_descriptor_version(name). Throws
+/// std::invalid_argument for a name make_descriptor() does not know.
 int descriptor_version(const std::string& name);
 
 /// Reads the query setup of descriptor `kind` from a database's settings. Keys (each optional;

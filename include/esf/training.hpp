@@ -153,10 +153,6 @@ struct TrainingResult {
 /// std::invalid_argument for an unknown descriptor.
 Settings training_settings(const TrainingOptions& options, bool rescale_non_metric);
 
-/// The version train() stores for a descriptor: kEsfVersion for "esf", kBaselineDescriptorVersion
-/// for the others (what Recognizer's descriptor_version() expects).
-inline constexpr int kBaselineDescriptorVersion = 1;
-
 /// Trains every model under `root` that is not complete in `database` (opened for writing).
 /// Throws std::invalid_argument for bad options (an unknown descriptor: the message lists the
 /// valid names), for a root without meshes and when the database holds other settings (naming
