@@ -2,7 +2,6 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -19,20 +18,13 @@ namespace esf {
 
 using detail::cell_of;
 using detail::kGridSide;
+using detail::kTopBin;
 using detail::pack_cell;
+using detail::round_bin;
 
 namespace {
 
-constexpr int kTopBin = kEsfBins - 1;       // 63
 constexpr float kMinHeronProduct = 0.001f;  // s(s-a)(s-b)(s-c) in grid units (squared area)
-
-/// PCL's pcl_round(float) for a histogram position x >= 0: floor(x + 0.5f) in float (not
-/// round(): 0.49999997f gives 1). Truncation is floor for x + 0.5f > 0, and avoids the libm call
-/// floor() is without SSE4.1.
-inline int round_bin(float x) {
-    assert(x >= 0.0f);
-    return static_cast<int>(x + 0.5f);
-}
 
 }  // namespace
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "esf_simd.hpp"
+
 // GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -36,19 +38,7 @@ struct LaneMoments {
     }
 };
 
-#define ESF_TARGET_AVX512 \
-    __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx2,fma,bmi,bmi2")))
-
-bool cpu_has_avx512() {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-           __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
-}
-
-bool use_avx512(bool simd) {
-    static const bool available = cpu_has_avx512();  // CPU features do not change while running
-    return simd && available;
-}
+bool use_avx512(bool simd) { return simd && esf_avx512_available(); }
 
 /// x, y and z of 16 consecutive points (48 floats).
 ESF_TARGET_AVX512 inline void load16(const float* p, __m512& x, __m512& y, __m512& z) {

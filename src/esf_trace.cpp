@@ -2,6 +2,8 @@
 
 #include <immintrin.h>
 
+#include "esf_simd.hpp"
+
 // GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -111,8 +113,6 @@ void visited_scalar(std::span<const std::uint32_t> starts, std::span<const std::
         visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
 }
 
-#define ESF_TARGET_AVX512 \
-    __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx2,fma,bmi2")))
 #define ESF_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
 
 ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
@@ -417,11 +417,8 @@ ESF_TARGET_AVX2 void trace_lines_avx2(const VoxelGrid& grid, std::span<const std
 enum class Kernel { kScalar, kAvx2, kAvx512 };
 
 Kernel best_kernel() {
+    if (esf_avx512_available()) return Kernel::kAvx512;
     __builtin_cpu_init();
-    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
-        __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2"))
-        return Kernel::kAvx512;
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2")) return Kernel::kAvx2;
     return Kernel::kScalar;
 }

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "esf_simd.hpp"
+
 // GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
@@ -28,7 +30,6 @@ void TriangleSet::resize(std::size_t count) {
 namespace {
 
 constexpr int kLanes = 16;
-constexpr int kTopBin = 63;
 // Line and triangle classes of the reference: a line is IN when at most one of its cells is
 // empty, OUT when at most 7 are occupied; a triangle is OUT when its three lines hold at most 21
 // occupied cells, IN when at most 3 of their cells are empty.
@@ -148,9 +149,6 @@ inline std::uint32_t lowest_bits(std::uint32_t mask, int n) {
         mask &= ~(std::uint32_t{1} << (31 - std::countl_zero(mask)));
     return mask;
 }
-
-#define ESF_TARGET_AVX512 \
-    __attribute__((target("avx512f,avx512bw,avx512vl,avx512dq,avx2,fma,bmi,bmi2")))
 
 ESF_TARGET_AVX512 inline __m512 dot16(__m512 ax, __m512 ay, __m512 az, __m512 bx, __m512 by,
                                       __m512 bz) {
@@ -304,18 +302,7 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
     return done;
 }
 
-bool cpu_has_avx512() {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
-           __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
-           __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi") &&
-           __builtin_cpu_supports("bmi2");
-}
-
-bool use_avx512(bool simd) {
-    static const bool available = cpu_has_avx512();  // CPU features do not change while running
-    return simd && available;
-}
+bool use_avx512(bool simd) { return simd && esf_avx512_available(); }
 
 /// Histogram positions of 16 triangles: bins[slot][lane] into a 641-bin array (640: discard),
 /// slots 0-2 D2 of the lines, 3-5 their ratio, 6 D3, 7-9 A3 with weights weight[0..2].
@@ -323,8 +310,6 @@ struct HistogramBlock {
     alignas(64) std::uint32_t bins[10][kLanes];
     alignas(64) std::uint32_t weight[3][kLanes];
 };
-
-inline int round_bin(float x) { return static_cast<int>(x + 0.5f); }
 
 void histogram_block_scalar(const TriangleSet& set, const std::uint16_t* occupied,
                             const std::uint8_t* visited, std::size_t first, std::size_t lanes,

@@ -11,7 +11,15 @@
 #include <cstdint>
 #include <vector>
 
+#include "esf/esf_descriptor.hpp"
+
 namespace esf::detail {
+
+inline constexpr int kTopBin = kEsfBins - 1;  // 63
+
+/// PCL's pcl_round(float) for a histogram position x >= 0: floor(x + 0.5f) in float (not
+/// round(): 0.49999997f gives 1), by truncation.
+inline int round_bin(float x) { return static_cast<int>(x + 0.5f); }
 
 /// A point of the fast sampler: scaled coordinates and its cell (pack_cell()).
 struct alignas(16) PackedPoint {
@@ -53,7 +61,7 @@ int fast_angle_bin(float c);
 /// line opposite to the angle), from the triangles and the occupied / visited cells of their
 /// lines. `pcl_division`: bin D2 and D3 values as the reference does (d / max * 63) rather than
 /// by multiplying with 63 / max.
-using EsfCounts = std::array<std::array<std::uint32_t, 64>, 10>;
+using EsfCounts = std::array<std::array<std::uint32_t, kEsfBins>, kEsfBlocks>;
 EsfCounts histogram_triangles(const TriangleSet& triangles, const std::uint16_t* occupied,
                               const std::uint8_t* visited, bool pcl_division, bool simd);
 
