@@ -11,6 +11,7 @@
 
 #include "esf/database.hpp"
 #include "esf/knn_index.hpp"
+#include "neighbour_merge.hpp"
 
 namespace esf::detail {
 
@@ -43,31 +44,6 @@ KnnIndex lomo_index(const DescriptorMatrix& matrix, const LomoSetup& setup,
 std::vector<KnnNeighbour> lomo_search(const KnnIndex& index, const LomoSetup& setup,
                                       std::size_t query, std::size_t k);
 
-/// Merges per-signature neighbour lists: a view's distance is its minimum (ties: lower row);
-/// views for which `keep` is false are dropped; the k nearest by (distance, view) remain.
-template <typename Keep>
-std::vector<KnnNeighbour> merge_signature_neighbours(std::vector<KnnNeighbour> all, std::size_t k,
-                                                     Keep keep);
-
 // ---- implementation -------------------------------------------------------------------------
-
-template <typename Keep>
-std::vector<KnnNeighbour> merge_signature_neighbours(std::vector<KnnNeighbour> all, std::size_t k,
-                                                     Keep keep) {
-    std::sort(all.begin(), all.end(), [](const KnnNeighbour& a, const KnnNeighbour& b) {
-        if (a.view != b.view) return a.view < b.view;
-        if (a.distance != b.distance) return a.distance < b.distance;
-        return a.row < b.row;
-    });
-    std::vector<KnnNeighbour> best;
-    for (const KnnNeighbour& n : all)
-        if ((best.empty() || best.back().view != n.view) && keep(n.view)) best.push_back(n);
-    std::sort(best.begin(), best.end(), [](const KnnNeighbour& a, const KnnNeighbour& b) {
-        if (a.distance != b.distance) return a.distance < b.distance;
-        return a.view < b.view;
-    });
-    if (best.size() > k) best.resize(k);
-    return best;
-}
 
 }  // namespace esf::detail

@@ -11,6 +11,7 @@
 #include "esf/error.hpp"
 #include "esf/knn_index.hpp"
 #include "esf/parallel.hpp"
+#include "neighbour_merge.hpp"
 
 namespace esf {
 
@@ -152,20 +153,8 @@ std::vector<KnnNeighbour> merge_neighbours(const std::vector<KnnResult>& results
     std::vector<KnnNeighbour> all;
     for (const KnnResult& r : results)
         all.insert(all.end(), r.neighbours.begin(), r.neighbours.end());
-    std::sort(all.begin(), all.end(), [](const KnnNeighbour& a, const KnnNeighbour& b) {
-        if (a.view != b.view) return a.view < b.view;
-        if (a.distance != b.distance) return a.distance < b.distance;
-        return a.row < b.row;
-    });
-    std::vector<KnnNeighbour> best;
-    for (const KnnNeighbour& n : all)
-        if (best.empty() || best.back().view != n.view) best.push_back(n);
-    std::sort(best.begin(), best.end(), [](const KnnNeighbour& a, const KnnNeighbour& b) {
-        if (a.distance != b.distance) return a.distance < b.distance;
-        return a.view < b.view;
-    });
-    if (best.size() > k) best.resize(k);
-    return best;
+    return detail::merge_signature_neighbours(std::move(all), k,
+                                              [](std::uint32_t) { return true; });
 }
 
 }  // namespace
