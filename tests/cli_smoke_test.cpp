@@ -19,6 +19,7 @@
 #include "esf/cloud_io.hpp"
 #include "esf/database.hpp"
 #include "esf/esf_descriptor.hpp"
+#include "one_view_database.hpp"
 
 namespace fs = std::filesystem;
 using esf::test::CliRun;
@@ -115,33 +116,13 @@ TEST_F(CliSmokeTest, ClassifyWithACorruptDatabaseIsOneLine) {
 TEST_F(CliSmokeTest, ClassifyPrintsJsonAndReportsBadFiles) {
     // A database of two "models" whose single views are the descriptors of the box and of a
     // flat plate, described with the settings the command will use.
-    esf::EsfOptions options;
-    options.samples = 2000;
-    options.seed = 4;
     const std::string box = write_box("box.pcd");
     esf::Points plate;
     for (int i = 0; i < 60; ++i)
         for (int j = 0; j < 60; ++j) plate.push_back({0.002f * float(i), 0.002f * float(j), 1.0f});
     const std::string db_path = (dir_ / "db.sqlite").string();
-    {
-        esf::Database db(db_path, esf::OpenMode::kWrite);
-        db.set_settings({{"esf_samples", std::int64_t{2000}}, {"seed", std::int64_t{4}}});
-        db.add_descriptor_kind({"esf", esf::kEsfVersion, esf::kEsfSize});
-        const std::vector<std::pair<std::string, esf::Points>> models = {
-            {"box", esf::read_cloud(box).points}, {"plate", plate}};
-        for (const auto& [name, points] : models) {
-            esf::ModelEntry model;
-            model.category = name;
-            model.name = name + "_1";
-            model.file = name + "/" + name + "_1.ply";
-            esf::ViewEntry view;
-            view.points = points.size();
-            const esf::EsfResult r = esf::compute_esf(points, options);
-            view.descriptors.assign(r.descriptor.begin(), r.descriptor.end());
-            model.views.push_back(view);
-            db.write_model(model, "esf");
-        }
-    }
+    esf::test::write_one_view_database(db_path,
+                                       {{"box", esf::read_cloud(box).points}, {"plate", plate}});
     const std::string missing = (dir_ / "missing.pcd").string();
     const CliRun run =
         esf("classify --json -k 2 " + quoted(db_path) + " " + quoted(box) + " " + quoted(missing));

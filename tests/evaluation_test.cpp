@@ -23,6 +23,7 @@
 #include "esf/esf_descriptor.hpp"
 #include "esf/knn_index.hpp"
 #include "lomo_search.hpp"
+#include "one_view_database.hpp"
 
 namespace fs = std::filesystem;
 
@@ -445,30 +446,9 @@ esf::Points box_points(const Eigen::Vector3f& size, std::uint64_t seed) {
 
 TEST_F(EvaluateTestSet, ClassifiesSkipsAndReportsFailures) {
     // A database of two classes, each one model with one view: a cube and a flat plate.
-    esf::EsfOptions options;
-    options.samples = 2000;
-    options.seed = 4;
-    const std::vector<std::pair<std::string, esf::Points>> shapes = {
-        {"cube", box_points({0.08f, 0.08f, 0.08f}, 1)},
-        {"plate", box_points({0.12f, 0.12f, 0.004f}, 2)}};
     const std::string db_path = (dir_ / "db.sqlite").string();
-    {
-        esf::Database db(db_path, esf::OpenMode::kWrite);
-        db.set_settings({{"esf_samples", std::int64_t{2000}}, {"seed", std::int64_t{4}}});
-        db.add_descriptor_kind({"esf", esf::kEsfVersion, esf::kEsfSize});
-        for (const auto& [name, points] : shapes) {
-            esf::ModelEntry model;
-            model.category = name;
-            model.name = name + "_1";
-            model.file = name + "/" + name + "_1.ply";
-            esf::ViewEntry view;
-            view.points = points.size();
-            const esf::EsfResult r = esf::compute_esf(points, options);
-            view.descriptors.assign(r.descriptor.begin(), r.descriptor.end());
-            model.views.push_back(view);
-            db.write_model(model, "esf");
-        }
-    }
+    esf::test::write_one_view_database(db_path, {{"cube", box_points({0.08f, 0.08f, 0.08f}, 1)},
+                                                 {"plate", box_points({0.12f, 0.12f, 0.004f}, 2)}});
     // Queries: other samples of the same shapes, a missing file, a class the database lacks.
     for (const auto& [name, size, seed] :
          {std::tuple{"cube", Eigen::Vector3f(0.08f, 0.08f, 0.08f), 7},
