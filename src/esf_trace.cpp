@@ -140,50 +140,105 @@ ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
 // The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
 // one line per lane. Lines are sorted by length, so a group runs min(n) cells without masks and
 // only its few longer lanes run on with an activity mask. Gathers are never masked (slow on some
-// CPUs): lanes past their end wrap their cell index into the grid and their bit is dropped.
+// CPUs): lanes past their end keep their look-up inside the table and their bits are dropped.
 
-// The AVX-512 kernel looks up two cells per gather and has no loop-carried error terms:
+// The AVX-512 kernel looks up three cells per gathered element (gathers move about one element
+// per cycle: their element count sets its speed) and has no loop-carried error terms:
 //
 // - Closed form. After i cells the reference has stepped a minor axis of length a
 //   q(i) = floor((2 a i + L - 1) / (2 L)) times (its error term starts at 2a - L, gains 2a per
-//   cell and loses 2L per step). That is floor(i * a/L + (L - 1/2) / (2L)) exactly: the fraction
-//   is never within 1/(4L) >= 1/252 of an integer, and the float evaluation (products of integers
-//   below 2^13 by one rounded reciprocal, one fused multiply-add) errs by less than 1e-5.
-// - Block table. Byte j of `blocks` (from kBlockPad) holds the 2x2x2 cells j + kBlockOffsets[k]
-//   as bit k. Cells i and i+1 of a line differ by one step along each axis that moves, so both
-//   lie in the block anchored at cell i minus one step along each axis the line walks down.
+//   cell and loses 2L per step). That is floor(v(i)), v(i) = i * a/L + (L - 1/2) / (2L), exactly:
+//   v(i) is never within 1/(4L) >= 1/252 of an integer, and the float evaluation (products of
+//   integers below 2^13 by one rounded reciprocal, one fused multiply-add) errs by less than 1e-5.
+//   The steps to cells i+1 and i+2 follow from r = v(i) - q(i) (exact in float):
+//   q(i+1) - q(i) = [r >= 1 - a/L] and q(i+2) - q(i) = floor(r + 2a/L), both with that margin.
+// - Cube table. Entry j of `cubes` (from kCubePad) holds the 3x3x3 cells j + dx + 64 dy + 4096 dz
+//   as bit dx + 3 dy + 9 dz. Cells i, i+1 and i+2 of a line lie within two steps of cell i along
+//   each axis, in its direction, so all three lie in the cube anchored at cell i minus two steps
+//   along each axis the line walks down.
 
-constexpr std::int32_t kBlockOffsets[8] = {0, 1, 64, 65, 4096, 4097, 4160, 4161};
-constexpr std::int32_t kBlockPad = 4224;  // anchors reach down to cell -4161
 constexpr std::int32_t kGridCells = kGridSide * kGridSide * kGridSide;
+constexpr std::int32_t kCubePad = 8448;  // anchors reach down to cell -(2 + 2 * 64 + 2 * 4096)
+constexpr int kCubeWordPad = kCubePad / 64;
 
-ESF_TARGET_AVX512 void build_blocks(const VoxelGrid& grid, std::vector<std::uint8_t>& blocks) {
-    constexpr int kWordPad = kBlockPad / 64;  // 66 zero words before the grid, 66 after
-    std::array<std::uint64_t, kWordPad + kGridWords + kWordPad> words{};
-    std::copy(grid.words.begin(), grid.words.end(), words.begin() + kWordPad);
-    blocks.resize(static_cast<std::size_t>(kBlockPad + kGridCells + 64));
+constexpr std::size_t kMaxPackedLines = std::size_t{1} << 28;
+
+/// Lines sorted by visited count, packed as start | end << 18 | line << 36 (line < 2^28).
+void sort_lines(std::span<const std::uint32_t> starts, std::span<const std::uint32_t> ends,
+                std::span<const std::uint8_t> visited, std::vector<std::uint64_t>& sorted) {
+    std::array<std::uint32_t, kGridSide + 1> bucket{};
+    for (const std::uint8_t v : visited) ++bucket[v];
+    std::uint32_t sum = 0;
+    for (auto& b : bucket) {
+        const std::uint32_t c = b;
+        b = sum;
+        sum += c;
+    }
+    sorted.resize(visited.size());
+    for (std::size_t i = 0; i < visited.size(); ++i)
+        sorted[bucket[visited[i]]++] =
+            starts[i] | std::uint64_t{ends[i]} << 18 | std::uint64_t{i} << 36;
+}
+
+/// Fills the cube table for `grid`. Rows of 64 entries whose cells are all empty are zero;
+/// `dirty` marks the rows that are not, so a later grid clears only those.
+ESF_TARGET_AVX512 void build_cubes(const VoxelGrid& grid, TraceScratch& scratch) {
+    std::array<std::uint64_t, kCubeWordPad + kGridWords + kCubeWordPad> words{};
+    std::copy(grid.words.begin(), grid.words.end(), words.begin() + kCubeWordPad);
+    if (scratch.cubes.empty()) {
+        scratch.cubes.assign(static_cast<std::size_t>(kCubePad + kGridCells), 0u);
+        scratch.dirty_rows.assign(static_cast<std::size_t>(kCubeWordPad + kGridWords), 0);
+    }
     __m512i bit[8];
     for (int k = 0; k < 8; ++k) bit[k] = _mm512_set1_epi8(static_cast<char>(1 << k));
-    for (int chunk = -kWordPad; chunk < kGridWords; ++chunk) {  // cells 64 chunk .. 64 chunk + 63
-        const std::uint64_t* w = words.data() + kWordPad + chunk;
-        __m512i acc = _mm512_setzero_si512();
-        // Most rows of a view's grid are empty: so are their blocks.
-        if ((w[0] | w[1] | w[2] | w[64] | w[65] | w[66]) != 0) {
-            for (int k = 0; k < 8; ++k) {
-                const int word = kBlockOffsets[k] / 64, shift = kBlockOffsets[k] % 64;
-                const std::uint64_t plane =
-                    shift == 0 ? w[word] : (w[word] >> 1) | (w[word + 1] << 63);
-                acc = _mm512_or_si512(acc, _mm512_maskz_mov_epi8(plane, bit[k]));
-            }
+    for (int row = -kCubeWordPad; row < kGridWords; ++row) {  // entries 64 row .. 64 row + 63
+        const std::uint64_t* w = words.data() + kCubeWordPad + row;
+        std::uint8_t& dirty = scratch.dirty_rows[static_cast<std::size_t>(row + kCubeWordPad)];
+        auto* entries =
+            reinterpret_cast<__m512i*>(scratch.cubes.data() + kCubePad + 64 * std::ptrdiff_t{row});
+        // Most rows of a view's grid are empty: so are their cubes.
+        if ((w[0] | w[1] | w[2] | w[3] | w[64] | w[65] | w[66] | w[67] | w[128] | w[129] | w[130] |
+             w[131]) == 0) {
+            if (dirty)
+                for (int j = 0; j < 4; ++j)
+                    _mm512_storeu_si512(entries + j, _mm512_setzero_si512());
+            dirty = 0;
+            continue;
         }
-        _mm512_storeu_si512(blocks.data() + kBlockPad + 64 * chunk, acc);
+        dirty = 1;
+        // Byte x of plane p: bits 8p .. 8p + 7 of entry 64 row + x.
+        __m512i plane[4] = {_mm512_setzero_si512(), _mm512_setzero_si512(), _mm512_setzero_si512(),
+                            _mm512_setzero_si512()};
+        for (int dz = 0; dz < 3; ++dz)
+            for (int dy = 0; dy < 3; ++dy) {
+                const std::uint64_t low = w[dy + 64 * dz], high = w[dy + 64 * dz + 1];
+                for (int dx = 0; dx < 3; ++dx) {
+                    const std::uint64_t cells = dx == 0 ? low : (low >> dx) | (high << (64 - dx));
+                    const int k = dx + 3 * dy + 9 * dz;
+                    plane[k / 8] =
+                        _mm512_or_si512(plane[k / 8], _mm512_maskz_mov_epi8(cells, bit[k % 8]));
+                }
+            }
+        for (int j = 0; j < 4; ++j) {
+            __m512i entry = _mm512_setzero_si512();
+            for (int p = 0; p < 4; ++p)
+                entry = _mm512_or_si512(
+                    entry,
+                    _mm512_slli_epi32(_mm512_cvtepu8_epi32(_mm512_extracti32x4_epi32(plane[p], j)),
+                                      static_cast<unsigned>(8 * p)));
+            _mm512_storeu_si512(entries + j, entry);
+        }
     }
 }
 
-struct PairLanes {
-    __m512 start, major_step, step1, step2;  // cell index arithmetic, in float (exact: < 2^24)
-    __m512 slope1, slope2, intercept;        // q(i) = floor(i * slope + intercept)
-    __m512i anchor_offset, first_bit, major_flip, flip1, flip2, limit, occupied;
+struct CubeLanes {
+    __m512 start, major_step, step1, step2;  // anchor cell arithmetic, in float (exact: < 2^24)
+    __m512 slope1, slope2, intercept;        // v(i) = i * slope + intercept
+    __m512 rise1, rise2;                     // 1 - slope
+    __m512 twice1, twice2;                   // 2 slope
+    __m512 base2, weight1f, weight2f;        // bit of cell i+2: base2 + steps1 w1 + steps2 w2
+    __m512 limit;                            // cells before it are counted
+    __m512i first_bit, base1, weight1, weight2, occupied;
 };
 
 /// The value of the major axis, and of the first and second minor axis (x-major: y, z;
@@ -202,22 +257,25 @@ ESF_TARGET_AVX512 inline __m512i minor2_of(const AxisRoles& r, const __m512i* v)
     return _mm512_mask_blend_epi32(r.z_major, v[2], v[1]);
 }
 
-ESF_TARGET_AVX512 PairLanes setup_pairs(__m512i s, __m512i t, bool skip_known) {
+ESF_TARGET_AVX512 CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
     const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
     const __m512i m63 = _mm512_set1_epi32(63);
-    __m512i length[3], step[3], block_bit[3];
-    __m512i anchor_offset = zero, first_bit = zero;
+    __m512i length[3], step[3], weight[3];  // weight: signed bit weight of the axis in a cube
+    __m512i anchor_offset = zero, base0 = zero;
     for (int k = 0; k < 3; ++k) {
         const unsigned shift = static_cast<unsigned>(k * kGridBits);
         const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
                                            _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
         length[k] = _mm512_abs_epi32(d);
         const __m512i unit = _mm512_set1_epi32(1 << shift);
+        const __m512i w = _mm512_set1_epi32(k == 0 ? 1 : k == 1 ? 3 : 9);
         const __mmask16 down = _mm512_cmplt_epi32_mask(d, zero);
         step[k] = _mm512_mask_sub_epi32(unit, down, zero, unit);
-        block_bit[k] = _mm512_set1_epi32(1 << k);
-        anchor_offset = _mm512_mask_sub_epi32(anchor_offset, down, anchor_offset, unit);
-        first_bit = _mm512_mask_or_epi32(first_bit, down, first_bit, block_bit[k]);
+        weight[k] = _mm512_mask_sub_epi32(w, down, zero, w);
+        // Walking down an axis, cell i sits two steps above the cube's corner.
+        anchor_offset =
+            _mm512_mask_sub_epi32(anchor_offset, down, anchor_offset, _mm512_add_epi32(unit, unit));
+        base0 = _mm512_mask_add_epi32(base0, down, base0, _mm512_add_epi32(w, w));
     }
     const __mmask16 x_major = _mm512_cmpge_epi32_mask(length[0], length[1]) &
                               _mm512_cmpge_epi32_mask(length[0], length[2]);
@@ -228,8 +286,8 @@ ESF_TARGET_AVX512 PairLanes setup_pairs(__m512i s, __m512i t, bool skip_known) {
     const __m512i cells = _mm512_max_epi32(major_of(roles, length), one);  // visited: max(L, 1)
     const __m512 l = _mm512_cvtepi32_ps(cells);
     const __m512 half_per_cell = _mm512_div_ps(_mm512_set1_ps(0.5f), l);  // 1 / (2L)
-    PairLanes lanes;
-    lanes.start = _mm512_cvtepi32_ps(s);
+    CubeLanes lanes;
+    lanes.start = _mm512_cvtepi32_ps(_mm512_add_epi32(s, anchor_offset));
     lanes.major_step = _mm512_cvtepi32_ps(major_of(roles, step));
     lanes.step1 = _mm512_cvtepi32_ps(minor1_of(roles, step));
     lanes.step2 = _mm512_cvtepi32_ps(minor2_of(roles, step));
@@ -237,53 +295,82 @@ ESF_TARGET_AVX512 PairLanes setup_pairs(__m512i s, __m512i t, bool skip_known) {
     lanes.slope1 = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(a1, a1)), half_per_cell);
     lanes.slope2 = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(a2, a2)), half_per_cell);
     lanes.intercept = _mm512_mul_ps(_mm512_sub_ps(l, _mm512_set1_ps(0.5f)), half_per_cell);
-    lanes.anchor_offset = anchor_offset;
-    lanes.first_bit = first_bit;
-    lanes.major_flip = major_of(roles, block_bit);
-    lanes.flip1 = minor1_of(roles, block_bit);
-    lanes.flip2 = minor2_of(roles, block_bit);
+    lanes.rise1 = _mm512_sub_ps(_mm512_set1_ps(1.0f), lanes.slope1);
+    lanes.rise2 = _mm512_sub_ps(_mm512_set1_ps(1.0f), lanes.slope2);
+    lanes.twice1 = _mm512_add_ps(lanes.slope1, lanes.slope1);
+    lanes.twice2 = _mm512_add_ps(lanes.slope2, lanes.slope2);
+    const __m512i major_weight = major_of(roles, weight);
+    lanes.first_bit = _mm512_sllv_epi32(one, base0);
+    lanes.base1 = _mm512_add_epi32(base0, major_weight);
+    lanes.base2 = _mm512_cvtepi32_ps(_mm512_add_epi32(lanes.base1, major_weight));
+    lanes.weight1 = minor1_of(roles, weight);
+    lanes.weight2 = minor2_of(roles, weight);
+    lanes.weight1f = _mm512_cvtepi32_ps(lanes.weight1);
+    lanes.weight2f = _mm512_cvtepi32_ps(lanes.weight2);
     // With known ends, cells 0, 1 and L-1 count without a look-up and the walk covers 2..L-2.
-    lanes.limit = skip_known ? _mm512_sub_epi32(cells, one) : cells;
+    lanes.limit = _mm512_cvtepi32_ps(skip_known ? _mm512_sub_epi32(cells, one) : cells);
     lanes.occupied = skip_known ? _mm512_min_epi32(cells, _mm512_set1_epi32(3)) : zero;
     return lanes;
 }
 
-/// Cells i and i+1 of every lane (lanes past their end masked when `tail`).
+/// Cells i, i+1 and i+2 of every lane (`i` in every lane of fi; lanes past their end masked
+/// when `tail`).
 template <bool tail>
-ESF_TARGET_AVX512 inline void trace_pair(PairLanes& lanes, const int* blocks, int i) {
+ESF_TARGET_AVX512 inline void trace_triple(CubeLanes& lanes, const int* cubes, __m512 fi) {
     constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
-    const __m512 fi = _mm512_set1_ps(static_cast<float>(i));
-    const __m512 fi1 = _mm512_set1_ps(static_cast<float>(i + 1));
-    const __m512 q1 =
-        _mm512_roundscale_ps(_mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept), kFloor);
-    const __m512 q2 =
-        _mm512_roundscale_ps(_mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept), kFloor);
-    const __m512 next1 =
-        _mm512_roundscale_ps(_mm512_fmadd_ps(fi1, lanes.slope1, lanes.intercept), kFloor);
-    const __m512 next2 =
-        _mm512_roundscale_ps(_mm512_fmadd_ps(fi1, lanes.slope2, lanes.intercept), kFloor);
+    const __m512 v1 = _mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept);
+    const __m512 v2 = _mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept);
+    const __m512 q1 = _mm512_roundscale_ps(v1, kFloor);
+    const __m512 q2 = _mm512_roundscale_ps(v2, kFloor);
+    const __m512 r1 = _mm512_sub_ps(v1, q1), r2 = _mm512_sub_ps(v2, q2);
+    const __mmask16 next1 = _mm512_cmp_ps_mask(r1, lanes.rise1, _CMP_GE_OQ);
+    const __mmask16 next2 = _mm512_cmp_ps_mask(r2, lanes.rise2, _CMP_GE_OQ);
+    const __m512 steps1 = _mm512_roundscale_ps(_mm512_add_ps(r1, lanes.twice1), kFloor);
+    const __m512 steps2 = _mm512_roundscale_ps(_mm512_add_ps(r2, lanes.twice2), kFloor);
     const __m512 position = _mm512_fmadd_ps(
         q2, lanes.step2,
         _mm512_fmadd_ps(q1, lanes.step1, _mm512_fmadd_ps(fi, lanes.major_step, lanes.start)));
-    __m512i cell = _mm512_cvttps_epi32(position);
-    if (tail) cell = _mm512_and_si512(cell, _mm512_set1_epi32(kGridCells - 1));
-    const __m512i block =
-        _mm512_mask_i32gather_epi32(_mm512_setzero_si512(), static_cast<__mmask16>(0xffff),
-                                    _mm512_add_epi32(cell, lanes.anchor_offset), blocks, 1);
-    __m512i next_bit = _mm512_mask_or_epi32(lanes.major_flip, _mm512_cmpneq_ps_mask(q1, next1),
-                                            lanes.major_flip, lanes.flip1);
-    next_bit =
-        _mm512_mask_or_epi32(next_bit, _mm512_cmpneq_ps_mask(q2, next2), next_bit, lanes.flip2);
-    next_bit = _mm512_xor_si512(next_bit, lanes.first_bit);
+    __m512i anchor = _mm512_cvttps_epi32(position);
+    // Lanes past their end may leave the grid: their (ignored) look-ups stay in the table.
+    if (tail)
+        anchor = _mm512_min_epi32(_mm512_max_epi32(anchor, _mm512_set1_epi32(-kCubePad)),
+                                  _mm512_set1_epi32(kGridCells - 1));
+    const __m512i cube = _mm512_mask_i32gather_epi32(
+        _mm512_setzero_si512(), static_cast<__mmask16>(0xffff), anchor, cubes, 4);
+    __m512i bit1 = _mm512_mask_add_epi32(lanes.base1, next1, lanes.base1, lanes.weight1);
+    bit1 = _mm512_mask_add_epi32(bit1, next2, bit1, lanes.weight2);
+    const __m512i bit2 = _mm512_cvttps_epi32(_mm512_fmadd_ps(
+        steps1, lanes.weight1f, _mm512_fmadd_ps(steps2, lanes.weight2f, lanes.base2)));
     const __m512i one = _mm512_set1_epi32(1);
-    __mmask16 first = _mm512_test_epi32_mask(block, _mm512_sllv_epi32(one, lanes.first_bit));
-    __mmask16 second = _mm512_test_epi32_mask(block, _mm512_sllv_epi32(one, next_bit));
+    __mmask16 first = _mm512_test_epi32_mask(cube, lanes.first_bit);
+    __mmask16 second = _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit1));
+    __mmask16 third = _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit2));
     if (tail) {
-        first &= _mm512_cmpgt_epi32_mask(lanes.limit, _mm512_set1_epi32(i));
-        second &= _mm512_cmpgt_epi32_mask(lanes.limit, _mm512_set1_epi32(i + 1));
+        first &= _mm512_cmp_ps_mask(lanes.limit, fi, _CMP_GT_OQ);
+        second &=
+            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(1.0f)), _CMP_GT_OQ);
+        third &=
+            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(2.0f)), _CMP_GT_OQ);
     }
     lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, first, lanes.occupied, one);
     lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, second, lanes.occupied, one);
+    lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, third, lanes.occupied, one);
+}
+
+/// Starts, ends and line numbers of the `live` records from `record`.
+ESF_TARGET_AVX512 inline void unpack_lines(const std::uint64_t* record, __mmask16 live,
+                                           __m512i& starts, __m512i& ends, __m512i& lines) {
+    const __m512i low = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live), record);
+    const __m512i high = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live >> 8), record + 8);
+    const auto narrow = [](__m512i a, __m512i b) ESF_TARGET_AVX512 {
+        return _mm512_inserti64x4(_mm512_castsi256_si512(_mm512_cvtepi64_epi32(a)),
+                                  _mm512_cvtepi64_epi32(b), 1);
+    };
+    const __m512i cell = _mm512_set1_epi64(0x3ffff);
+    starts = narrow(_mm512_and_si512(low, cell), _mm512_and_si512(high, cell));
+    ends = narrow(_mm512_and_si512(_mm512_srli_epi64(low, 18), cell),
+                  _mm512_and_si512(_mm512_srli_epi64(high, 18), cell));
+    lines = narrow(_mm512_srli_epi64(low, 36), _mm512_srli_epi64(high, 36));
 }
 
 ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
@@ -293,46 +380,31 @@ ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
                                           std::span<std::uint8_t> visited, TraceScratch& scratch,
                                           bool skip_known) {
     visited_avx512(starts, ends, visited);
-    sort_by_length(visited, scratch);
-    build_blocks(grid, scratch.blocks);
-    const auto* blocks = reinterpret_cast<const int*>(scratch.blocks.data() + kBlockPad);
-    const auto* start32 = reinterpret_cast<const int*>(starts.data());
-    const auto* end32 = reinterpret_cast<const int*>(ends.data());
+    sort_lines(starts, ends, visited, scratch.sorted);
+    build_cubes(grid, scratch);
+    const auto* cubes = reinterpret_cast<const int*>(scratch.cubes.data() + kCubePad);
     const std::size_t count = starts.size();
     const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
-    const __m512i zero = _mm512_setzero_si512();
-    // Two groups of 16 lines at once: their gathers overlap, and a loop serves 32 lines.
-    constexpr std::size_t kGroup = 32;
-    for (std::size_t group = 0; group < count; group += kGroup) {
-        const std::size_t size = std::min(kGroup, count - group);
-        const std::size_t size_a = std::min<std::size_t>(16, size), size_b = size - size_a;
-        const auto live_a = static_cast<__mmask16>((1u << size_a) - 1u);
-        const auto live_b = static_cast<__mmask16>((1u << size_b) - 1u);
-        const std::uint32_t* ids = scratch.order.data() + group;
-        const __m512i ids_a = _mm512_maskz_loadu_epi32(live_a, ids);
-        const __m512i ids_b = _mm512_maskz_loadu_epi32(live_b, ids + 16);
-        PairLanes a =
-            setup_pairs(_mm512_mask_i32gather_epi32(zero, live_a, ids_a, start32, 4),
-                        _mm512_mask_i32gather_epi32(zero, live_a, ids_a, end32, 4), skip_known);
-        PairLanes b =
-            setup_pairs(_mm512_mask_i32gather_epi32(zero, live_b, ids_b, start32, 4),
-                        _mm512_mask_i32gather_epi32(zero, live_b, ids_b, end32, 4), skip_known);
-        const int shortest = visited[ids[0]] - end_skip;
-        const int longest = visited[ids[size - 1]] - end_skip;
+    const __m512 three = _mm512_set1_ps(3.0f);
+    for (std::size_t group = 0; group < count; group += 16) {
+        const std::size_t size = std::min<std::size_t>(16, count - group);
+        const std::uint64_t* record = scratch.sorted.data() + group;
+        __m512i s, t, lines;
+        unpack_lines(record, static_cast<__mmask16>((1u << size) - 1u), s, t, lines);
+        CubeLanes lanes = setup_cubes(s, t, skip_known);
+        const int shortest = visited[record[0] >> 36] - end_skip;
+        const int longest = visited[record[size - 1] >> 36] - end_skip;
         int i = first_cell;
-        for (; i + 1 < shortest; i += 2) {
-            trace_pair<false>(a, blocks, i);
-            trace_pair<false>(b, blocks, i);
-        }
-        for (; i < longest; i += 2) {
-            trace_pair<true>(a, blocks, i);
-            trace_pair<true>(b, blocks, i);
-        }
-        alignas(64) std::uint32_t result[kGroup];
-        _mm512_store_si512(result, a.occupied);
-        _mm512_store_si512(result + 16, b.occupied);
+        __m512 fi = _mm512_set1_ps(static_cast<float>(i));
+        for (; i + 2 < shortest; i += 3, fi = _mm512_add_ps(fi, three))
+            trace_triple<false>(lanes, cubes, fi);
+        for (; i < longest; i += 3, fi = _mm512_add_ps(fi, three))
+            trace_triple<true>(lanes, cubes, fi);
+        alignas(64) std::uint32_t result[16], line[16];
+        _mm512_store_si512(result, lanes.occupied);
+        _mm512_store_si512(line, lines);
         for (std::size_t k = 0; k < size; ++k)
-            occupied[ids[k]] = static_cast<std::uint16_t>(result[k]);
+            occupied[line[k]] = static_cast<std::uint16_t>(result[k]);
     }
 }
 
@@ -446,6 +518,8 @@ void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
     Kernel use = best;
     if (kernel == TraceKernel::kScalar) use = Kernel::kScalar;
     if (kernel == TraceKernel::kAvx2 && best != Kernel::kScalar) use = Kernel::kAvx2;
+    // The AVX-512 kernel packs line numbers into 28 bits (ESF draws at most 3 * 10^7 lines).
+    if (use == Kernel::kAvx512 && starts.size() >= kMaxPackedLines) use = Kernel::kAvx2;
     switch (use) {
         case Kernel::kAvx512:
             trace_lines_avx512(grid, starts, ends, occupied, visited, scratch,

@@ -293,7 +293,7 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
 }
 
 // As a descriptor's lines: between cells set before the dilation, in a sparse grid whose empty
-// rows and grid borders are where the block look-ups of the AVX-512 kernel can go wrong.
+// rows and grid borders are where the cube look-ups of the AVX-512 kernel can go wrong.
 TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
     std::mt19937 rng(11);
     std::uniform_int_distribution<std::uint32_t> coord(0, 63), edge(0, 1);
@@ -323,6 +323,40 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
             EXPECT_EQ(actual, expected);
             EXPECT_EQ(actual_visited, expected_visited);
         }
+}
+
+// One scratch serves many grids, as in an estimator: tables built for one grid must not leak
+// into the next (each grid fills a different corner of the cube).
+TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
+    std::mt19937 rng(5);
+    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx2}) {
+        esf::detail::TraceScratch scratch;
+        for (std::uint32_t corner = 0; corner < 8; ++corner) {
+            std::uniform_int_distribution<std::uint32_t> coord(0, 40);
+            esf::detail::VoxelGrid grid;
+            grid.clear();
+            std::vector<std::uint32_t> points;
+            for (int i = 0; i < 200; ++i) {
+                std::uint32_t c[3];
+                for (int k = 0; k < 3; ++k) c[k] = (corner >> k & 1) ? 63 - coord(rng) : coord(rng);
+                points.push_back(pack_cell(c[0], c[1], c[2]));
+                grid.set(points.back());
+            }
+            grid.dilate(64);
+            const std::size_t n = 5003;
+            std::vector<std::uint32_t> starts(n), ends(n);
+            std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+            for (std::size_t i = 0; i < n; ++i)
+                starts[i] = points[pick(rng)], ends[i] = points[pick(rng)];
+            std::vector<std::uint16_t> expected(n), actual(n);
+            std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
+            esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
+            esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel,
+                                     esf::detail::LineEnds::kSetBeforeDilation);
+            EXPECT_EQ(actual, expected) << "corner " << corner;
+            EXPECT_EQ(actual_visited, expected_visited) << "corner " << corner;
+        }
+    }
 }
 
 }  // namespace
