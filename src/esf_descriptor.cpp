@@ -190,14 +190,28 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     const EsfOptions& opt = options_;
     EsfResult result;
 
+    const int half = opt.grid_size / 2;
+    const bool pcl = opt.sampler == EsfSampler::kPcl;
+    // The fast sampler's centring pass reveals non-finite points for free; the pcl sampler
+    // checks every point first.
+    using detail::NormaliseOutcome;
+    detail::Normalisation normalisation;
+    NormaliseOutcome normalised = NormaliseOutcome::kNonFinite;
+    if (!pcl && input.size() >= 3)
+        normalised = detail::normalise_points(input, half, opt.simd, normalisation);
     FinitePoints finite;
     std::span<const Eigen::Vector3f> points = input;
-    const bool all_finite = std::all_of(input.begin(), input.end(),
-                                        [](const Eigen::Vector3f& p) { return p.allFinite(); });
+    const bool all_finite =
+        !pcl && input.size() >= 3
+            ? normalised != NormaliseOutcome::kNonFinite
+            : std::all_of(input.begin(), input.end(),
+                          [](const Eigen::Vector3f& p) { return p.allFinite(); });
     if (!all_finite) {
         finite = drop_non_finite(input);
         points = finite.points;
         result.dropped_points = finite.dropped;
+        if (!pcl && points.size() >= 3)
+            normalised = detail::normalise_points(points, half, opt.simd, normalisation);
     }
     result.points = points.size();
     if (points.size() < 3)
@@ -210,8 +224,6 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         throw std::invalid_argument("ESF input too large: " + std::to_string(points.size()) +
                                     " points");
 
-    const int half = opt.grid_size / 2;
-    const bool pcl = opt.sampler == EsfSampler::kPcl;
     const auto identical = [&] {
         return std::invalid_argument("degenerate cloud: all " + std::to_string(points.size()) +
                                      " points are identical");
@@ -220,11 +232,10 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         return std::invalid_argument("degenerate cloud: all " + std::to_string(points.size()) +
                                      " points lie on one line");
     };
-    detail::Normalisation normalisation;
     if (pcl) {
         if (!normalise_pcl(points, ws.scaled)) throw identical();
         if (collinear(points)) throw on_one_line();
-    } else if (!detail::normalise_points(points, half, opt.simd, normalisation)) {
+    } else if (normalised != NormaliseOutcome::kNormalised) {
         throw identical();
     }
 

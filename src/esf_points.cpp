@@ -3,6 +3,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "esf_simd.hpp"
@@ -175,25 +176,25 @@ ESF_TARGET_AVX512 void voxelise_avx512(const float* p, std::size_t blocks, const
     }
 }
 
-/// Sets cells in the grid; consecutive points of a scan mostly fall into one grid word.
+/// Sets cells in the grid. Consecutive points of a scan often fall into one grid word: even and
+/// odd points go to two copies of the grid, merged at the end, so that a point's update does not
+/// wait for its predecessor's (branches on word changes would mispredict, a single copy would
+/// serialise on store forwarding).
 void set_cells(const std::uint32_t* cells, std::size_t count, VoxelGrid& grid) {
-    std::uint32_t word = 0;
-    std::uint64_t bits = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-        if (cells[i] >> 6 != word) {
-            grid.words[word] |= bits;
-            word = cells[i] >> 6;
-            bits = 0;
-        }
-        bits |= std::uint64_t{1} << (cells[i] & 63);
+    std::array<std::uint64_t, kGridWords> odd{};
+    std::size_t i = 0;
+    for (; i + 1 < count; i += 2) {
+        grid.words[cells[i] >> 6] |= std::uint64_t{1} << (cells[i] & 63);
+        odd[cells[i + 1] >> 6] |= std::uint64_t{1} << (cells[i + 1] & 63);
     }
-    grid.words[word] |= bits;
+    if (i < count) grid.words[cells[i] >> 6] |= std::uint64_t{1} << (cells[i] & 63);
+    for (std::size_t w = 0; w < grid.words.size(); ++w) grid.words[w] |= odd[w];
 }
 
 }  // namespace
 
-bool normalise_points(std::span<const Eigen::Vector3f> points, int half, bool simd,
-                      Normalisation& out) {
+NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int half, bool simd,
+                                  Normalisation& out) {
     const std::size_t n = points.size();
     const float* p = points.data()->data();
     const std::size_t blocks = use_avx512(simd) ? n / kLanes : 0;
@@ -205,6 +206,8 @@ bool normalise_points(std::span<const Eigen::Vector3f> points, int half, bool si
     out.cx = sums.total(0) / count;
     out.cy = sums.total(1) / count;
     out.cz = sums.total(2) / count;
+    if (!std::isfinite(out.cx) || !std::isfinite(out.cy) || !std::isfinite(out.cz))
+        return NormaliseOutcome::kNonFinite;
     double largest = blocks > 0 ? radius2_avx512(p, blocks, out) : 0.0;
     for (std::size_t i = blocks * kLanes; i < n; ++i) {
         const double x = static_cast<double>(points[i].x()) - out.cx;
@@ -212,9 +215,9 @@ bool normalise_points(std::span<const Eigen::Vector3f> points, int half, bool si
         const double z = static_cast<double>(points[i].z()) - out.cz;
         largest = std::max(largest, x * x + y * y + z * z);
     }
-    if (!(largest > 0.0) || !std::isfinite(largest)) return false;
+    if (!(largest > 0.0) || !std::isfinite(largest)) return NormaliseOutcome::kCoincident;
     out.scale = half / std::sqrt(largest);
-    return true;
+    return NormaliseOutcome::kNormalised;
 }
 
 Eigen::Matrix3d voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisation& t,

@@ -29,9 +29,16 @@ struct Normalisation {
     double cx = 0.0, cy = 0.0, cz = 0.0, scale = 0.0;
 };
 
-/// False when all points coincide (or a coordinate is out of range).
-bool normalise_points(std::span<const Eigen::Vector3f> points, int half, bool simd,
-                      Normalisation& out);
+enum class NormaliseOutcome {
+    kNormalised,
+    kCoincident,  // all points coincide
+    kNonFinite,   // some coordinate is NaN or infinite (a sum of doubles is finite iff its terms
+                  // are)
+};
+
+/// Centre and scale of the points; `out` is valid when kNormalised.
+NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int half, bool simd,
+                                  Normalisation& out);
 
 /// Scales every point, stores it with its cell in `packed` (plus one zero padding point) and
 /// `cells`, and sets the cells in `grid` (not cleared first). Returns the covariance of the scaled
