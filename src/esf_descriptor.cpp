@@ -257,7 +257,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
             points, normalisation, half, opt.simd, ws.packed, ws.cells, ws.grid);
         if (collinear(covariance)) throw on_one_line();
     }
-    ws.grid.dilate(opt.grid_size);
+    ws.grid.dilate(opt.grid_size, opt.simd);
 
     // Random triples (Sec. III-C): `samples` accepted, degenerate ones redrawn.
     const auto samples = static_cast<std::size_t>(opt.samples);

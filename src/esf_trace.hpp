@@ -23,14 +23,16 @@ constexpr std::uint32_t pack_cell(std::uint32_t x, std::uint32_t y, std::uint32_
 }
 
 struct alignas(64) VoxelGrid {
-    std::array<std::uint64_t, kGridWords> words{};
+    using Words = std::array<std::uint64_t, kGridWords>;
+    alignas(64) Words words{};
 
     void clear() { words.fill(0); }
     void set(std::uint32_t cell) { words[cell >> 6] |= std::uint64_t{1} << (cell & 63); }
     bool occupied(std::uint32_t cell) const { return (words[cell >> 6] >> (cell & 63)) & 1; }
     /// Marks the 26 neighbours of every set cell too (the one-cell dilation of the reference),
-    /// clipped to the first `side` cells of each axis.
-    void dilate(int side);
+    /// clipped to the first `side` cells of each axis. `simd`: use AVX-512 where the CPU has it
+    /// (the same bits either way).
+    void dilate(int side, bool simd = true);
 };
 
 /// Number of cells a line between two cells visits: max(L, 1).

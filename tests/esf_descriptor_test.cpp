@@ -292,6 +292,40 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
         ASSERT_EQ(expected_visited[i], esf::detail::visited_cells(starts[i], ends[i]));
 }
 
+// Both dilation kernels against the definition, on random grids of every side ESF allows.
+TEST(VoxelGrid, DilationKernelsMatchTheDefinition) {
+    std::mt19937 rng(3);
+    for (int side : {8, 30, 40, 62, 64}) {
+        std::uniform_int_distribution<std::uint32_t> coord(0, static_cast<std::uint32_t>(side) - 1);
+        esf::detail::VoxelGrid grid;
+        grid.clear();
+        for (int i = 0; i < 150; ++i) grid.set(pack_cell(coord(rng), coord(rng), coord(rng)));
+        grid.set(pack_cell(0, 0, 0));
+        grid.set(pack_cell(static_cast<std::uint32_t>(side) - 1, 0,
+                           static_cast<std::uint32_t>(side) - 1));
+        esf::detail::VoxelGrid expected;
+        expected.clear();
+        for (int z = 0; z < side; ++z)
+            for (int y = 0; y < side; ++y)
+                for (int x = 0; x < side; ++x) {
+                    bool near = false;
+                    for (int dz = -1; dz <= 1; ++dz)
+                        for (int dy = -1; dy <= 1; ++dy)
+                            for (int dx = -1; dx <= 1; ++dx) {
+                                const int a = x + dx, b = y + dy, c = z + dz;
+                                if (a >= 0 && b >= 0 && c >= 0 && a < side && b < side && c < side)
+                                    near = near || grid.occupied(pack_cell(a, b, c));
+                            }
+                    if (near) expected.set(pack_cell(x, y, z));
+                }
+        for (bool simd : {true, false}) {
+            esf::detail::VoxelGrid dilated = grid;
+            dilated.dilate(side, simd);
+            EXPECT_EQ(dilated.words, expected.words) << "side " << side << " simd " << simd;
+        }
+    }
+}
+
 // As a descriptor's lines: between cells set before the dilation, in a sparse grid whose empty
 // rows and grid borders are where the cube look-ups of the AVX-512 kernel can go wrong.
 TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
