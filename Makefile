@@ -30,10 +30,10 @@ bench: build
 	@$(BUILD)/bench/esf_bench_descriptor ../shared/data/real/pcl/milk_test.pcd ../shared/data/real/objects/*.pcd
 
 format:
-	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
+	@git ls-files '*.cpp' '*.hpp' '*.inl' | xargs clang-format -i
 
 format-check:
-	@git ls-files '*.cpp' '*.hpp' | xargs clang-format --dry-run --Werror
+	@git ls-files '*.cpp' '*.hpp' '*.inl' | xargs clang-format --dry-run --Werror
 
 clean:
 	@rm -rf $(BUILD) $(BUILD).configure.log

@@ -64,8 +64,9 @@ enum class LineEnds {
     kSetBeforeDilation,
 };
 
-/// Which kernel trace_lines() runs: the widest the CPU has (default), or a narrower one (tests).
-enum class TraceKernel { kBest, kAvx2, kScalar };
+/// Which kernel trace_lines() runs: the widest the CPU has (default), or a narrower one (tests;
+/// kAvx512: AVX-512 without VPOPCNTD, as on Skylake-SP).
+enum class TraceKernel { kBest, kAvx512, kAvx2, kScalar };
 
 /// For every line i (starts[i] -> ends[i]): occupied[i] = occupied cells on it, visited[i] =
 /// cells visited. Picks the widest SIMD kernel the CPU has at run time (AVX-512, AVX2 or
@@ -80,7 +81,7 @@ void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> st
                         std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
                         std::span<std::uint8_t> visited);
 
-/// Name of the widest kernel this CPU runs ("avx512", "avx2" or "scalar").
+/// Name of the widest kernel this CPU runs ("avx512-popcnt", "avx512", "avx2" or "scalar").
 const char* trace_kernel_name();
 
 }  // namespace esf::detail

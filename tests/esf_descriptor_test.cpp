@@ -253,8 +253,8 @@ TEST(LineTrace, FollowsHandComputedBresenhamCells) {
     const std::uint32_t end[] = {pack_cell(5, 2, 0), pack_cell(5, 2, 0), pack_cell(7, 7, 7)};
     std::uint16_t occupied[3];
     std::uint8_t visited[3];
-    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx2,
-                        esf::detail::TraceKernel::kScalar}) {
+    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
+                        esf::detail::TraceKernel::kAvx2, esf::detail::TraceKernel::kScalar}) {
         esf::detail::TraceScratch scratch;
         esf::detail::trace_lines(grid, start, end, occupied, visited, scratch, kernel);
         EXPECT_EQ(occupied[0], 5);
@@ -282,7 +282,8 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
     std::vector<std::uint16_t> expected(n), actual(n);
     std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
     esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
-    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx2}) {
+    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
+                        esf::detail::TraceKernel::kAvx2}) {
         esf::detail::TraceScratch scratch;
         esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel);
         EXPECT_EQ(actual, expected);
@@ -350,7 +351,8 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
     std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
     esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
     for (auto ends_hint : {esf::detail::LineEnds::kAny, esf::detail::LineEnds::kSetBeforeDilation})
-        for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx2}) {
+        for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
+                            esf::detail::TraceKernel::kAvx2}) {
             esf::detail::TraceScratch scratch;
             esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel,
                                      ends_hint);
@@ -363,7 +365,8 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
 // into the next (each grid fills a different corner of the cube).
 TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
     std::mt19937 rng(5);
-    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx2}) {
+    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
+                        esf::detail::TraceKernel::kAvx2}) {
         esf::detail::TraceScratch scratch;
         for (std::uint32_t corner = 0; corner < 8; ++corner) {
             std::uniform_int_distribution<std::uint32_t> coord(0, 40);

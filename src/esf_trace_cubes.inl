@@ -1,0 +1,194 @@
+// Internal: the AVX-512 group loop of the ESF line tracer (see esf_trace.cpp), included once per
+// instruction set variant with ESF_CUBE_TARGET (the target attribute) and ESF_CUBE_POPCNT (1:
+// count the three looked-up cells with one VPOPCNTD; 0: with three mask tests).
+// No include guard: esf_trace.cpp includes it twice, in two namespaces.
+
+struct CubeLanes {
+    __m512 start, major_step, step1, step2;  // anchor cell arithmetic, in float (exact: < 2^24)
+    __m512 slope1, slope2, intercept;        // v(i) = i * slope + intercept
+    __m512 rise1, rise2;                     // 1 - slope
+    __m512 twice1, twice2;                   // 2 slope
+    __m512 base2, weight1f, weight2f;        // bit of cell i+2: base2 + steps1 w1 + steps2 w2
+    __m512 limit;                            // cells before it are counted
+    __m512i first_bit, base1, weight1, weight2, occupied;
+};
+
+/// The value of the major axis, and of the first and second minor axis (x-major: y, z;
+/// y-major: x, z; z-major: x, y) of each lane.
+struct AxisRoles {
+    __mmask16 x_major, y_major, z_major;
+};
+
+ESF_CUBE_TARGET inline __m512i major_of(const AxisRoles& r, const __m512i* v) {
+    return _mm512_mask_blend_epi32(r.x_major, _mm512_mask_blend_epi32(r.y_major, v[2], v[1]), v[0]);
+}
+ESF_CUBE_TARGET inline __m512i minor1_of(const AxisRoles& r, const __m512i* v) {
+    return _mm512_mask_blend_epi32(r.x_major, v[0], v[1]);
+}
+ESF_CUBE_TARGET inline __m512i minor2_of(const AxisRoles& r, const __m512i* v) {
+    return _mm512_mask_blend_epi32(r.z_major, v[2], v[1]);
+}
+
+ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
+    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
+    const __m512i m63 = _mm512_set1_epi32(63);
+    __m512i length[3], step[3], weight[3];  // weight: signed bit weight of the axis in a cube
+    __m512i anchor_offset = zero, base0 = zero;
+    for (int k = 0; k < 3; ++k) {
+        const unsigned shift = static_cast<unsigned>(k * kGridBits);
+        const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
+                                           _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
+        length[k] = _mm512_abs_epi32(d);
+        const __m512i unit = _mm512_set1_epi32(1 << shift);
+        const __m512i w = _mm512_set1_epi32(k == 0 ? 1 : k == 1 ? 3 : 9);
+        const __mmask16 down = _mm512_cmplt_epi32_mask(d, zero);
+        step[k] = _mm512_mask_sub_epi32(unit, down, zero, unit);
+        weight[k] = _mm512_mask_sub_epi32(w, down, zero, w);
+        // Walking down an axis, cell i sits two steps above the cube's corner.
+        anchor_offset =
+            _mm512_mask_sub_epi32(anchor_offset, down, anchor_offset, _mm512_add_epi32(unit, unit));
+        base0 = _mm512_mask_add_epi32(base0, down, base0, _mm512_add_epi32(w, w));
+    }
+    const __mmask16 x_major = _mm512_cmpge_epi32_mask(length[0], length[1]) &
+                              _mm512_cmpge_epi32_mask(length[0], length[2]);
+    const __mmask16 y_major =
+        static_cast<__mmask16>(~x_major & _mm512_cmpge_epi32_mask(length[1], length[2]));
+    const __mmask16 z_major = static_cast<__mmask16>(~(x_major | y_major));
+    const AxisRoles roles{x_major, y_major, z_major};
+    const __m512i cells = _mm512_max_epi32(major_of(roles, length), one);  // visited: max(L, 1)
+    const __m512 l = _mm512_cvtepi32_ps(cells);
+    const __m512 half_per_cell = _mm512_div_ps(_mm512_set1_ps(0.5f), l);  // 1 / (2L)
+    CubeLanes lanes;
+    lanes.start = _mm512_cvtepi32_ps(_mm512_add_epi32(s, anchor_offset));
+    lanes.major_step = _mm512_cvtepi32_ps(major_of(roles, step));
+    lanes.step1 = _mm512_cvtepi32_ps(minor1_of(roles, step));
+    lanes.step2 = _mm512_cvtepi32_ps(minor2_of(roles, step));
+    const __m512i a1 = minor1_of(roles, length), a2 = minor2_of(roles, length);
+    lanes.slope1 = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(a1, a1)), half_per_cell);
+    lanes.slope2 = _mm512_mul_ps(_mm512_cvtepi32_ps(_mm512_add_epi32(a2, a2)), half_per_cell);
+    lanes.intercept = _mm512_mul_ps(_mm512_sub_ps(l, _mm512_set1_ps(0.5f)), half_per_cell);
+    lanes.rise1 = _mm512_sub_ps(_mm512_set1_ps(1.0f), lanes.slope1);
+    lanes.rise2 = _mm512_sub_ps(_mm512_set1_ps(1.0f), lanes.slope2);
+    lanes.twice1 = _mm512_add_ps(lanes.slope1, lanes.slope1);
+    lanes.twice2 = _mm512_add_ps(lanes.slope2, lanes.slope2);
+    const __m512i major_weight = major_of(roles, weight);
+    lanes.first_bit = _mm512_sllv_epi32(one, base0);
+    lanes.base1 = _mm512_add_epi32(base0, major_weight);
+    lanes.base2 = _mm512_cvtepi32_ps(_mm512_add_epi32(lanes.base1, major_weight));
+    lanes.weight1 = minor1_of(roles, weight);
+    lanes.weight2 = minor2_of(roles, weight);
+    lanes.weight1f = _mm512_cvtepi32_ps(lanes.weight1);
+    lanes.weight2f = _mm512_cvtepi32_ps(lanes.weight2);
+    // With known ends, cells 0, 1 and L-1 count without a look-up and the walk covers 2..L-2.
+    lanes.limit = _mm512_cvtepi32_ps(skip_known ? _mm512_sub_epi32(cells, one) : cells);
+    lanes.occupied = skip_known ? _mm512_min_epi32(cells, _mm512_set1_epi32(3)) : zero;
+    return lanes;
+}
+
+/// Cells i, i+1 and i+2 of every lane (`i` in every lane of fi; lanes past their end masked
+/// when `tail`).
+template <bool tail>
+ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, __m512 fi) {
+    constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+    const __m512 v1 = _mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept);
+    const __m512 v2 = _mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept);
+    const __m512 q1 = _mm512_roundscale_ps(v1, kFloor);
+    const __m512 q2 = _mm512_roundscale_ps(v2, kFloor);
+    const __m512 r1 = _mm512_sub_ps(v1, q1), r2 = _mm512_sub_ps(v2, q2);
+    const __mmask16 next1 = _mm512_cmp_ps_mask(r1, lanes.rise1, _CMP_GE_OQ);
+    const __mmask16 next2 = _mm512_cmp_ps_mask(r2, lanes.rise2, _CMP_GE_OQ);
+    const __m512 steps1 = _mm512_roundscale_ps(_mm512_add_ps(r1, lanes.twice1), kFloor);
+    const __m512 steps2 = _mm512_roundscale_ps(_mm512_add_ps(r2, lanes.twice2), kFloor);
+    const __m512 position = _mm512_fmadd_ps(
+        q2, lanes.step2,
+        _mm512_fmadd_ps(q1, lanes.step1, _mm512_fmadd_ps(fi, lanes.major_step, lanes.start)));
+    __m512i anchor = _mm512_cvttps_epi32(position);
+    // Lanes past their end may leave the grid: their (ignored) look-ups stay in the table.
+    if (tail)
+        anchor = _mm512_min_epi32(_mm512_max_epi32(anchor, _mm512_set1_epi32(-kCubePad)),
+                                  _mm512_set1_epi32(kGridCells - 1));
+    const __m512i cube = _mm512_mask_i32gather_epi32(
+        _mm512_setzero_si512(), static_cast<__mmask16>(0xffff), anchor, cubes, 4);
+    __m512i bit1 = _mm512_mask_add_epi32(lanes.base1, next1, lanes.base1, lanes.weight1);
+    bit1 = _mm512_mask_add_epi32(bit1, next2, bit1, lanes.weight2);
+    const __m512i bit2 = _mm512_cvttps_epi32(_mm512_fmadd_ps(
+        steps1, lanes.weight1f, _mm512_fmadd_ps(steps2, lanes.weight2f, lanes.base2)));
+    const __m512i one = _mm512_set1_epi32(1);
+#if ESF_CUBE_POPCNT
+    // One population count of the three selected bits.
+    __m512i first = lanes.first_bit, second = _mm512_sllv_epi32(one, bit1),
+            third = _mm512_sllv_epi32(one, bit2);
+    if (tail) {
+        first = _mm512_maskz_mov_epi32(_mm512_cmp_ps_mask(lanes.limit, fi, _CMP_GT_OQ), first);
+        second = _mm512_maskz_mov_epi32(
+            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(1.0f)), _CMP_GT_OQ),
+            second);
+        third = _mm512_maskz_mov_epi32(
+            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(2.0f)), _CMP_GT_OQ),
+            third);
+    }
+    const __m512i selected =
+        _mm512_and_si512(cube, _mm512_ternarylogic_epi32(first, second, third, 0xfe));
+    lanes.occupied = _mm512_add_epi32(lanes.occupied, _mm512_popcnt_epi32(selected));
+}
+#else
+    __mmask16 first = _mm512_test_epi32_mask(cube, lanes.first_bit);
+    __mmask16 second = _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit1));
+    __mmask16 third = _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit2));
+    if (tail) {
+        first &= _mm512_cmp_ps_mask(lanes.limit, fi, _CMP_GT_OQ);
+        second &=
+            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(1.0f)), _CMP_GT_OQ);
+        third &=
+            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(2.0f)), _CMP_GT_OQ);
+    }
+    lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, first, lanes.occupied, one);
+    lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, second, lanes.occupied, one);
+    lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, third, lanes.occupied, one);
+}
+#endif
+
+/// Starts, ends and line numbers of the `live` records from `record`.
+ESF_CUBE_TARGET inline void unpack_lines(const std::uint64_t* record, __mmask16 live,
+                                         __m512i& starts, __m512i& ends, __m512i& lines) {
+    const __m512i low = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live), record);
+    const __m512i high = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live >> 8), record + 8);
+    const auto narrow = [](__m512i a, __m512i b) ESF_CUBE_TARGET {
+        return _mm512_inserti64x4(_mm512_castsi256_si512(_mm512_cvtepi64_epi32(a)),
+                                  _mm512_cvtepi64_epi32(b), 1);
+    };
+    const __m512i cell = _mm512_set1_epi64(0x3ffff);
+    starts = narrow(_mm512_and_si512(low, cell), _mm512_and_si512(high, cell));
+    ends = narrow(_mm512_and_si512(_mm512_srli_epi64(low, 18), cell),
+                  _mm512_and_si512(_mm512_srli_epi64(high, 18), cell));
+    lines = narrow(_mm512_srli_epi64(low, 36), _mm512_srli_epi64(high, 36));
+}
+
+/// Traces the sorted `records` (sort_lines()) through the cube table, 16 lines per group.
+ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::uint64_t* records,
+                                  std::size_t count, const std::uint8_t* visited,
+                                  std::uint16_t* occupied, bool skip_known) {
+    const auto* cubes = reinterpret_cast<const int*>(cube_table);
+    const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
+    const __m512 three = _mm512_set1_ps(3.0f);
+    for (std::size_t group = 0; group < count; group += 16) {
+        const std::size_t size = std::min<std::size_t>(16, count - group);
+        const std::uint64_t* record = records + group;
+        __m512i s, t, lines;
+        unpack_lines(record, static_cast<__mmask16>((1u << size) - 1u), s, t, lines);
+        CubeLanes lanes = setup_cubes(s, t, skip_known);
+        const int shortest = visited[record[0] >> 36] - end_skip;
+        const int longest = visited[record[size - 1] >> 36] - end_skip;
+        int i = first_cell;
+        __m512 fi = _mm512_set1_ps(static_cast<float>(i));
+        for (; i + 2 < shortest; i += 3, fi = _mm512_add_ps(fi, three))
+            trace_triple<false>(lanes, cubes, fi);
+        for (; i < longest; i += 3, fi = _mm512_add_ps(fi, three))
+            trace_triple<true>(lanes, cubes, fi);
+        alignas(64) std::uint32_t result[16], line[16];
+        _mm512_store_si512(result, lanes.occupied);
+        _mm512_store_si512(line, lines);
+        for (std::size_t k = 0; k < size; ++k)
+            occupied[line[k]] = static_cast<std::uint16_t>(result[k]);
+    }
+}
