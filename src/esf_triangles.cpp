@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 #include "esf_simd.hpp"
@@ -475,7 +476,26 @@ EsfCounts histogram_triangles(const TriangleSet& set, const std::uint16_t* occup
         else
             histogram_block_scalar(set, occupied, visited, first, lanes, pcl_division, d2_scale,
                                    d3_scale, block);
-        for (std::size_t l = 0; l < lanes; ++l) {
+        // Two lanes' positions per load (the increments are bound by memory operations).
+        std::size_t l = 0;
+        for (; l + 2 <= lanes; l += 2) {
+            std::uint32_t* first_copy = copies[l % kCopies];
+            std::uint32_t* second_copy = copies[(l + 1) % kCopies];
+            for (int k = 0; k < 7; ++k) {
+                std::uint64_t bins;
+                std::memcpy(&bins, &block.bins[k][l], sizeof bins);
+                ++first_copy[static_cast<std::uint32_t>(bins)];
+                ++second_copy[bins >> 32];
+            }
+            for (int k = 0; k < 3; ++k) {
+                std::uint64_t bins, weights;
+                std::memcpy(&bins, &block.bins[7 + k][l], sizeof bins);
+                std::memcpy(&weights, &block.weight[k][l], sizeof weights);
+                first_copy[static_cast<std::uint32_t>(bins)] += static_cast<std::uint32_t>(weights);
+                second_copy[bins >> 32] += static_cast<std::uint32_t>(weights >> 32);
+            }
+        }
+        for (; l < lanes; ++l) {
             std::uint32_t* h = copies[l % kCopies];
             for (int k = 0; k < 7; ++k) ++h[block.bins[k][l]];
             for (int k = 0; k < 3; ++k) h[block.bins[7 + k][l]] += block.weight[k][l];
