@@ -19,9 +19,10 @@ namespace {
 
 constexpr int kLanes = 16;
 
-/// Lane-wise partial sums: point i adds to lane i % 16.
-struct LaneSums {
-    double v[3][kLanes] = {};
+/// `Count` lane-wise partial sums: point i adds to lane i % 16; totals reduce in lane order.
+template <int Count>
+struct LaneSumsOf {
+    double v[Count][kLanes] = {};
     double total(int k) const {
         double sum = 0.0;
         for (double x : v[k]) sum += x;
@@ -29,15 +30,10 @@ struct LaneSums {
     }
 };
 
-/// Moments of the scaled points, lane-wise: x, y, z, xx, xy, xz, yy, yz, zz.
-struct LaneMoments {
-    double v[9][kLanes] = {};
-    double total(int k) const {
-        double sum = 0.0;
-        for (double x : v[k]) sum += x;
-        return sum;
-    }
-};
+/// Sums of x, y and z.
+using LaneSums = LaneSumsOf<3>;
+/// Moments of the scaled points: x, y, z, xx, xy, xz, yy, yz, zz.
+using LaneMoments = LaneSumsOf<9>;
 
 bool use_avx512(bool simd) { return simd && esf_avx512_available(); }
 

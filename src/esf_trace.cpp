@@ -152,16 +152,22 @@ inline std::uint16_t trace_one(const VoxelGrid& grid, std::uint32_t start, const
     return static_cast<std::uint16_t>(occupied);
 }
 
+/// For a counting sort by visited count: where the lines of each count start.
+std::array<std::uint32_t, kGridSide + 1> length_offsets(std::span<const std::uint8_t> visited) {
+    std::array<std::uint32_t, kGridSide + 1> offsets{};
+    for (const std::uint8_t v : visited) ++offsets[v];
+    std::uint32_t sum = 0;
+    for (auto& offset : offsets) {
+        const std::uint32_t count = offset;
+        offset = sum;
+        sum += count;
+    }
+    return offsets;
+}
+
 /// Orders lines by visited count, so that the SIMD lanes of one group run equally long.
 void sort_by_length(std::span<const std::uint8_t> visited, TraceScratch& scratch) {
-    std::array<std::uint32_t, kGridSide + 1> bucket{};
-    for (const std::uint8_t v : visited) ++bucket[v];
-    std::uint32_t sum = 0;
-    for (auto& b : bucket) {
-        const std::uint32_t c = b;
-        b = sum;
-        sum += c;
-    }
+    std::array<std::uint32_t, kGridSide + 1> bucket = length_offsets(visited);
     scratch.order.resize(visited.size());
     for (std::size_t i = 0; i < visited.size(); ++i)
         scratch.order[bucket[visited[i]]++] = static_cast<std::uint32_t>(i);
@@ -221,23 +227,19 @@ constexpr std::int32_t kGridCells = kGridSide * kGridSide * kGridSide;
 constexpr std::int32_t kCubePad = 8448;  // anchors reach down to cell -(2 + 2 * 64 + 2 * 4096)
 constexpr int kCubeWordPad = kCubePad / 64;
 
-constexpr std::size_t kMaxPackedLines = std::size_t{1} << 28;
+// A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
+constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
+constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
+constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
 
-/// Lines sorted by visited count, packed as start | end << 18 | line << 36 (line < 2^28).
+/// Lines sorted by visited count, as records.
 void sort_lines(std::span<const std::uint32_t> starts, std::span<const std::uint32_t> ends,
                 std::span<const std::uint8_t> visited, std::vector<std::uint64_t>& sorted) {
-    std::array<std::uint32_t, kGridSide + 1> bucket{};
-    for (const std::uint8_t v : visited) ++bucket[v];
-    std::uint32_t sum = 0;
-    for (auto& b : bucket) {
-        const std::uint32_t c = b;
-        b = sum;
-        sum += c;
-    }
+    std::array<std::uint32_t, kGridSide + 1> bucket = length_offsets(visited);
     sorted.resize(visited.size());
     for (std::size_t i = 0; i < visited.size(); ++i)
         sorted[bucket[visited[i]]++] =
-            starts[i] | std::uint64_t{ends[i]} << 18 | std::uint64_t{i} << 36;
+            starts[i] | std::uint64_t{ends[i]} << kEndShift | std::uint64_t{i} << kLineShift;
 }
 
 /// Fills the cube table for `grid`. Rows of 64 entries whose cells are all empty are zero;
@@ -446,6 +448,7 @@ void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
     if (kernel == TraceKernel::kAvx2 && best != Kernel::kScalar) use = Kernel::kAvx2;
     if (kernel == TraceKernel::kAvx512 && best == Kernel::kAvx512Popcnt) use = Kernel::kAvx512;
     // The AVX-512 kernels pack line numbers into 28 bits (ESF draws at most 3 * 10^7 lines).
+    static_assert(kMaxPackedLines == std::size_t{1} << 28);
     if ((use == Kernel::kAvx512 || use == Kernel::kAvx512Popcnt) &&
         starts.size() >= kMaxPackedLines)
         use = Kernel::kAvx2;

@@ -114,39 +114,28 @@ ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, __m
     const __m512i bit2 = _mm512_cvttps_epi32(_mm512_fmadd_ps(
         steps1, lanes.weight1f, _mm512_fmadd_ps(steps2, lanes.weight2f, lanes.base2)));
     const __m512i one = _mm512_set1_epi32(1);
+    __mmask16 live[3] = {0xffff, 0xffff, 0xffff};  // cells i, i+1, i+2 before the lane's end
+    if (tail)
+        for (int k = 0; k < 3; ++k)
+            live[k] = _mm512_cmp_ps_mask(
+                lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(static_cast<float>(k))), _CMP_GT_OQ);
 #if ESF_CUBE_POPCNT
     // One population count of the three selected bits.
-    __m512i first = lanes.first_bit, second = _mm512_sllv_epi32(one, bit1),
-            third = _mm512_sllv_epi32(one, bit2);
-    if (tail) {
-        first = _mm512_maskz_mov_epi32(_mm512_cmp_ps_mask(lanes.limit, fi, _CMP_GT_OQ), first);
-        second = _mm512_maskz_mov_epi32(
-            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(1.0f)), _CMP_GT_OQ),
-            second);
-        third = _mm512_maskz_mov_epi32(
-            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(2.0f)), _CMP_GT_OQ),
-            third);
-    }
+    const __m512i first = _mm512_maskz_mov_epi32(live[0], lanes.first_bit);
+    const __m512i second = _mm512_maskz_sllv_epi32(live[1], one, bit1);
+    const __m512i third = _mm512_maskz_sllv_epi32(live[2], one, bit2);
     const __m512i selected =
         _mm512_and_si512(cube, _mm512_ternarylogic_epi32(first, second, third, 0xfe));
     lanes.occupied = _mm512_add_epi32(lanes.occupied, _mm512_popcnt_epi32(selected));
-}
 #else
-    __mmask16 first = _mm512_test_epi32_mask(cube, lanes.first_bit);
-    __mmask16 second = _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit1));
-    __mmask16 third = _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit2));
-    if (tail) {
-        first &= _mm512_cmp_ps_mask(lanes.limit, fi, _CMP_GT_OQ);
-        second &=
-            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(1.0f)), _CMP_GT_OQ);
-        third &=
-            _mm512_cmp_ps_mask(lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(2.0f)), _CMP_GT_OQ);
-    }
+    const __mmask16 first = live[0] & _mm512_test_epi32_mask(cube, lanes.first_bit);
+    const __mmask16 second = live[1] & _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit1));
+    const __mmask16 third = live[2] & _mm512_test_epi32_mask(cube, _mm512_sllv_epi32(one, bit2));
     lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, first, lanes.occupied, one);
     lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, second, lanes.occupied, one);
     lanes.occupied = _mm512_mask_add_epi32(lanes.occupied, third, lanes.occupied, one);
-}
 #endif
+}
 
 /// Starts, ends and line numbers of the `live` records from `record`.
 ESF_CUBE_TARGET inline void unpack_lines(const std::uint64_t* record, __mmask16 live,
@@ -157,11 +146,11 @@ ESF_CUBE_TARGET inline void unpack_lines(const std::uint64_t* record, __mmask16 
         return _mm512_inserti64x4(_mm512_castsi256_si512(_mm512_cvtepi64_epi32(a)),
                                   _mm512_cvtepi64_epi32(b), 1);
     };
-    const __m512i cell = _mm512_set1_epi64(0x3ffff);
+    const __m512i cell = _mm512_set1_epi64(static_cast<long long>(kCellMask));
     starts = narrow(_mm512_and_si512(low, cell), _mm512_and_si512(high, cell));
-    ends = narrow(_mm512_and_si512(_mm512_srli_epi64(low, 18), cell),
-                  _mm512_and_si512(_mm512_srli_epi64(high, 18), cell));
-    lines = narrow(_mm512_srli_epi64(low, 36), _mm512_srli_epi64(high, 36));
+    ends = narrow(_mm512_and_si512(_mm512_srli_epi64(low, kEndShift), cell),
+                  _mm512_and_si512(_mm512_srli_epi64(high, kEndShift), cell));
+    lines = narrow(_mm512_srli_epi64(low, kLineShift), _mm512_srli_epi64(high, kLineShift));
 }
 
 /// Traces the sorted `records` (sort_lines()) through the cube table, 16 lines per group.
@@ -177,8 +166,8 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::ui
         __m512i s, t, lines;
         unpack_lines(record, static_cast<__mmask16>((1u << size) - 1u), s, t, lines);
         CubeLanes lanes = setup_cubes(s, t, skip_known);
-        const int shortest = visited[record[0] >> 36] - end_skip;
-        const int longest = visited[record[size - 1] >> 36] - end_skip;
+        const int shortest = visited[record[0] >> kLineShift] - end_skip;
+        const int longest = visited[record[size - 1] >> kLineShift] - end_skip;
         int i = first_cell;
         __m512 fi = _mm512_set1_ps(static_cast<float>(i));
         for (; i + 2 < shortest; i += 3, fi = _mm512_add_ps(fi, three))

@@ -11,6 +11,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <string>
 #include <thread>
 
 #include "esf_trace.hpp"
@@ -223,6 +224,11 @@ TEST(EsfDescriptor, SmallerGridAndFewerSamplesWork) {
 
 using esf::detail::pack_cell;
 
+/// The SIMD line tracers (kAvx512: the build without VPOPCNTD).
+constexpr esf::detail::TraceKernel kSimdKernels[] = {esf::detail::TraceKernel::kBest,
+                                                     esf::detail::TraceKernel::kAvx512,
+                                                     esf::detail::TraceKernel::kAvx2};
+
 // One cell set: the 3x3x3 block around it is occupied, clipped at the border.
 TEST(VoxelGrid, DilationMarksTheTwentySixNeighbours) {
     esf::detail::VoxelGrid grid;
@@ -282,8 +288,7 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
     std::vector<std::uint16_t> expected(n), actual(n);
     std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
     esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
-    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
-                        esf::detail::TraceKernel::kAvx2}) {
+    for (auto kernel : kSimdKernels) {
         esf::detail::TraceScratch scratch;
         esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel);
         EXPECT_EQ(actual, expected);
@@ -327,6 +332,34 @@ TEST(VoxelGrid, DilationKernelsMatchTheDefinition) {
     }
 }
 
+/// `count` lines between random pairs of `points`.
+struct RandomLines {
+    std::vector<std::uint32_t> starts, ends;
+};
+
+RandomLines lines_between(const std::vector<std::uint32_t>& points, std::size_t count,
+                          std::mt19937& rng) {
+    RandomLines lines{std::vector<std::uint32_t>(count), std::vector<std::uint32_t>(count)};
+    std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
+    for (std::size_t i = 0; i < count; ++i)
+        lines.starts[i] = points[pick(rng)], lines.ends[i] = points[pick(rng)];
+    return lines;
+}
+
+/// The kernel's counts for `lines` equal the scalar reference's.
+void expect_kernel_matches_scalar(const esf::detail::VoxelGrid& grid, const RandomLines& lines,
+                                  esf::detail::TraceKernel kernel, esf::detail::LineEnds ends_hint,
+                                  esf::detail::TraceScratch& scratch, const std::string& context) {
+    const std::size_t n = lines.starts.size();
+    std::vector<std::uint16_t> expected(n), actual(n);
+    std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
+    esf::detail::trace_lines_scalar(grid, lines.starts, lines.ends, expected, expected_visited);
+    esf::detail::trace_lines(grid, lines.starts, lines.ends, actual, actual_visited, scratch,
+                             kernel, ends_hint);
+    EXPECT_EQ(actual, expected) << context;
+    EXPECT_EQ(actual_visited, expected_visited) << context;
+}
+
 // As a descriptor's lines: between cells set before the dilation, in a sparse grid whose empty
 // rows and grid borders are where the cube look-ups of the AVX-512 kernel can go wrong.
 TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
@@ -343,21 +376,11 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
         grid.set(points.back());
     }
     grid.dilate(64);
-    const std::size_t n = 20011;
-    std::vector<std::uint32_t> starts(n), ends(n);
-    std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
-    for (std::size_t i = 0; i < n; ++i) starts[i] = points[pick(rng)], ends[i] = points[pick(rng)];
-    std::vector<std::uint16_t> expected(n), actual(n);
-    std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
-    esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
+    const RandomLines lines = lines_between(points, 20011, rng);
     for (auto ends_hint : {esf::detail::LineEnds::kAny, esf::detail::LineEnds::kSetBeforeDilation})
-        for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
-                            esf::detail::TraceKernel::kAvx2}) {
+        for (auto kernel : kSimdKernels) {
             esf::detail::TraceScratch scratch;
-            esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel,
-                                     ends_hint);
-            EXPECT_EQ(actual, expected);
-            EXPECT_EQ(actual_visited, expected_visited);
+            expect_kernel_matches_scalar(grid, lines, kernel, ends_hint, scratch, "");
         }
 }
 
@@ -365,8 +388,7 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
 // into the next (each grid fills a different corner of the cube).
 TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
     std::mt19937 rng(5);
-    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
-                        esf::detail::TraceKernel::kAvx2}) {
+    for (auto kernel : kSimdKernels) {
         esf::detail::TraceScratch scratch;
         for (std::uint32_t corner = 0; corner < 8; ++corner) {
             std::uniform_int_distribution<std::uint32_t> coord(0, 40);
@@ -380,18 +402,9 @@ TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
                 grid.set(points.back());
             }
             grid.dilate(64);
-            const std::size_t n = 5003;
-            std::vector<std::uint32_t> starts(n), ends(n);
-            std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
-            for (std::size_t i = 0; i < n; ++i)
-                starts[i] = points[pick(rng)], ends[i] = points[pick(rng)];
-            std::vector<std::uint16_t> expected(n), actual(n);
-            std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
-            esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
-            esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel,
-                                     esf::detail::LineEnds::kSetBeforeDilation);
-            EXPECT_EQ(actual, expected) << "corner " << corner;
-            EXPECT_EQ(actual_visited, expected_visited) << "corner " << corner;
+            expect_kernel_matches_scalar(grid, lines_between(points, 5003, rng), kernel,
+                                         esf::detail::LineEnds::kSetBeforeDilation, scratch,
+                                         "corner " + std::to_string(corner));
         }
     }
 }
