@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "disjoint_sets.hpp"
 #include "esf/parallel.hpp"
 
 namespace esf {
@@ -399,27 +400,6 @@ std::uint64_t pack(const Cell& c) {
 /// Cell side for a tolerance: the cell diagonal stays below the tolerance.
 float cell_side(float tolerance) { return tolerance / std::sqrt(3.0f) * (1.0f - 1e-5f); }
 
-class DisjointSets {
-  public:
-    explicit DisjointSets(std::size_t n) : parent_(n) {
-        std::iota(parent_.begin(), parent_.end(), std::uint32_t{0});
-    }
-    std::uint32_t find(std::uint32_t i) {
-        while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
-        return i;
-    }
-    void unite(std::uint32_t a, std::uint32_t b) {
-        a = find(a);
-        b = find(b);
-        if (a == b) return;
-        if (a > b) std::swap(a, b);
-        parent_[b] = a;
-    }
-
-  private:
-    std::vector<std::uint32_t> parent_;
-};
-
 /// Connected components of the graph linking points at most `tolerance` apart: exactly the
 /// clusters of PCL's EuclideanClusterExtraction (Rusu 2009, Sec. 4.2), without a k-d tree.
 /// The grid's cells have a diagonal below the tolerance, so the points of one cell are always
@@ -637,19 +617,31 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
         return no_objects("no points between " + format_metres(options.min_height) + " and " +
                           format_metres(options.max_height) + " above it inside its hull");
 
-    // 5. Euclidean clustering of the candidates.
-    const float side = cell_side(options.cluster_tolerance);
-    for (const std::uint32_t i : candidates)
-        if (!cell_fits(cell_of(points[i], side)))
-            throw std::invalid_argument(
-                "segment_scene: coordinates too large for the clustering grid (point " +
-                std::to_string(i) +
-                "; at most 2^20 cells of cluster_tolerance / sqrt(3) from "
-                "the origin per axis)");
+    // 5. Grouping of the candidates.
     std::vector<Eigen::Vector3f> candidate_points(candidates.size());
     for (std::size_t k = 0; k < candidates.size(); ++k) candidate_points[k] = points[candidates[k]];
-    const std::vector<std::uint32_t> component =
-        euclidean_components(candidate_points, options.cluster_tolerance);
+    std::vector<std::uint32_t> component;
+    if (options.grouping == Grouping::kConvexity) {
+        SurfacePatchOptions patch_options = options.patches;
+        patch_options.viewpoint = options.viewpoint;
+        const PatchGraph graph =
+            organised ? image_patches(points, width, height, candidates, patch_options)
+                      : voxel_patches(points, candidates, patch_options);
+        const std::vector<std::uint32_t> segment = convex_segments(graph, options.convexity);
+        component.resize(candidates.size());
+        for (std::size_t k = 0; k < candidates.size(); ++k)
+            component[k] = segment[graph.patch_of[k]];
+    } else {
+        const float side = cell_side(options.cluster_tolerance);
+        for (const std::uint32_t i : candidates)
+            if (!cell_fits(cell_of(points[i], side)))
+                throw std::invalid_argument(
+                    "segment_scene: coordinates too large for the clustering grid (point " +
+                    std::to_string(i) +
+                    "; at most 2^20 cells of cluster_tolerance / sqrt(3) from "
+                    "the origin per axis)");
+        component = euclidean_components(candidate_points, options.cluster_tolerance);
+    }
 
     // 6. Clusters within the size limits.
     const std::uint32_t component_count = *std::max_element(component.begin(), component.end()) + 1;
@@ -765,6 +757,12 @@ void validate(const SegmentationOptions& o) {
     if (!o.viewpoint.allFinite()) fail("viewpoint must be finite");
     if (o.threads < 0)
         fail("threads must be >= 0 (0 = all cores), got " + std::to_string(o.threads));
+    if (o.grouping != Grouping::kConvexity && o.grouping != Grouping::kEuclidean)
+        fail("unknown grouping");
+    SurfacePatchOptions patches = o.patches;
+    patches.viewpoint = o.viewpoint;
+    validate(patches);
+    validate(o.convexity);
 }
 
 SegmentationResult segment_scene(const PointCloud& cloud, const SegmentationOptions& options) {

@@ -1,6 +1,7 @@
 #include "cli_scene.hpp"
 
 #include <filesystem>
+#include <map>
 
 #include "esf/cloud_io.hpp"
 
@@ -47,8 +48,27 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
                    "Sensor position x y z in the cloud's frame (m); its side of the plane is up")
         ->expected(3)
         ->capture_default_str();
+    cmd.add_option("--grouping", o.grouping,
+                   "How points above the table become objects: convexity (surface patches "
+                   "joined where the surface is convex; splits touching, stacked and leaning "
+                   "objects at the creases between them) or euclidean (all that touches is one)")
+        ->transform(CLI::CheckedTransformer(
+            std::map<std::string, Grouping>{{"convexity", Grouping::kConvexity},
+                                            {"euclidean", Grouping::kEuclidean}},
+            CLI::ignore_case))
+        ->default_str("convexity");
+    cmd.add_option("--concavity-tolerance", o.convexity.concavity_tolerance_deg,
+                   "Convexity grouping: neighbouring patches whose normals differ by less than "
+                   "this join even where the surface is concave (degrees)")
+        ->capture_default_str();
+    cmd.add_option("--patch-pixels", o.patches.tile_pixels,
+                   "Convexity grouping of organised clouds: side of a surface patch (pixels)")
+        ->capture_default_str();
+    cmd.add_option("--patch-size", o.patches.voxel_size,
+                   "Convexity grouping of unorganised clouds: side of a surface patch (m)")
+        ->capture_default_str();
     cmd.add_option("--cluster-tolerance", o.cluster_tolerance,
-                   "Largest gap between two points of one object (m)")
+                   "Euclidean grouping: largest gap between two points of one object (m)")
         ->capture_default_str();
     cmd.add_option("--min-cluster-points", o.min_cluster_points,
                    "Smaller clusters are dropped (points)")

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -16,6 +17,7 @@
 #include "esf/evaluation.hpp"
 #include "esf/recognizer.hpp"
 #include "esf/report.hpp"
+#include "esf/scene_evaluation.hpp"
 
 namespace esf::cli {
 
@@ -34,7 +36,98 @@ struct EvalArgs {
     std::string report;
     std::string title;
     bool json = false;
+    std::string scenes;
+    Grouping grouping = Grouping::kConvexity;
 };
+
+std::string percent_of(std::size_t a, std::size_t b) {
+    return b ? percent_text(static_cast<double>(a) / static_cast<double>(b)) : "-";
+}
+
+nlohmann::json summary_json(const SceneTypeSummary& t) {
+    return {{"type", t.type},
+            {"scenes", t.scenes},
+            {"objects", t.objects},
+            {"found", t.found},
+            {"split", t.split},
+            {"merged", t.merged},
+            {"missed", t.missed},
+            {"found_rate", t.found_rate()},
+            {"clusters", t.clusters},
+            {"background_clusters", t.background_clusters},
+            {"shared_clusters", t.shared_clusters},
+            {"labelled", t.labelled},
+            {"correct", t.correct},
+            {"end_to_end", t.end_to_end()}};
+}
+
+/// esf eval DB --scenes SCENES.csv
+void run_scene_eval(const EvalArgs& args) {
+    const SceneSet set = read_scene_set(args.scenes);
+    RecognizerOptions recognizer_options;
+    recognizer_options.k = args.k;
+    recognizer_options.descriptor = args.descriptor;
+    recognizer_options.use_weights = !args.no_weights;
+    recognizer_options.threads = args.threads;
+    const Recognizer recognizer(args.database, recognizer_options);
+    SceneEvaluationOptions options;
+    options.segmentation.grouping = args.grouping;
+    options.segmentation.threads = args.threads;
+    Progress progress("eval", set.scenes.size());
+    options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
+    const SceneEvaluationReport report = evaluate_scenes(recognizer, set, options);
+    progress.finish();
+    for (const SceneFailure& f : report.failures)
+        std::fprintf(stderr, "esf: warning: %s\n", with_file(f.file, f.error).c_str());
+
+    if (args.json) {
+        nlohmann::json out;
+        out["scene_set"] = report.scene_set;
+        out["database"] = args.database;
+        out["grouping"] = args.grouping == Grouping::kConvexity ? "convexity" : "euclidean";
+        out["types"] = nlohmann::json::array();
+        for (const SceneTypeSummary& t : report.types) out["types"].push_back(summary_json(t));
+        out["objects"] = nlohmann::json::array();
+        for (const SceneObjectOutcome& o : report.objects)
+            out["objects"].push_back({{"scene", o.scene},
+                                      {"type", o.type},
+                                      {"object_id", o.segmentation.object_id},
+                                      {"points", o.segmentation.points},
+                                      {"outcome", to_string(o.segmentation.outcome)},
+                                      {"coverage", o.segmentation.coverage},
+                                      {"purity", o.segmentation.purity},
+                                      {"parts", o.segmentation.parts},
+                                      {"class", o.true_class},
+                                      {"predicted", o.predicted_class},
+                                      {"correct", o.correct}});
+        out["failures"] = nlohmann::json::array();
+        for (const SceneFailure& f : report.failures)
+            out["failures"].push_back({{"file", f.file}, {"error", f.error}});
+        out["timings"] = {{"segment_ms_per_frame", report.segment_ms},
+                          {"recognize_ms_per_frame", report.recognize_ms}};
+        std::cout << out.dump(2) << '\n';
+    } else {
+        std::printf("scene set %s: %zu scenes, %zu objects\n\n", report.scene_set.c_str(),
+                    set.scenes.size(), report.objects.size());
+        std::printf("%-16s %7s %7s %6s %6s %6s %6s %9s %10s\n", "scene type", "objects", "found",
+                    "split", "merged", "missed", "shared", "one-clust", "end-to-end");
+        for (const SceneTypeSummary& t : report.types)
+            std::printf("%-16s %7zu %7zu %6zu %6zu %6zu %6zu %8s%% %9s%%\n", t.type.c_str(),
+                        t.objects, t.found, t.split, t.merged, t.missed, t.shared_clusters,
+                        percent_of(t.found, t.objects).c_str(),
+                        percent_of(t.correct, t.labelled).c_str());
+        std::printf(
+            "\nfound: one cluster holds >= 80 %% of the object and is >= 80 %% that object; "
+            "shared: clusters holding parts of two or more objects; end-to-end: found and named "
+            "right\nsegment %.2f ms, describe + classify %.2f ms per frame\n",
+            report.segment_ms, report.recognize_ms);
+    }
+    std::cout.flush();
+    if (!std::cout) throw std::runtime_error("writing the output failed");
+    if (report.objects.empty())
+        throw std::invalid_argument("no scene could be evaluated (" +
+                                    std::to_string(report.failures.size()) + " failed)");
+}
 
 void print_table(const EvaluationReport& r) {
     const std::string k = std::to_string(r.k) + "-NN";
@@ -76,8 +169,17 @@ void print_table(const EvaluationReport& r) {
 }
 
 void run_eval(const EvalArgs& args) {
+    if (!args.scenes.empty()) {
+        if (!args.test_set.empty() || args.synthetic)
+            throw CLI::ValidationError("--scenes", "--scenes takes no TESTSET.csv or --synthetic");
+        if (!args.report.empty())
+            throw CLI::ValidationError("--report", "--report is not available with --scenes");
+        run_scene_eval(args);
+        return;
+    }
     if (!args.synthetic && args.test_set.empty())
-        throw CLI::ValidationError("eval", "a TESTSET.csv is needed (or --synthetic)");
+        throw CLI::ValidationError(
+            "eval", "a TESTSET.csv is needed (or --synthetic, or --scenes SCENES.csv)");
     if (args.synthetic && !args.test_set.empty())
         throw CLI::ValidationError("eval", "--synthetic takes no TESTSET.csv");
     if (!args.synthetic && !args.groups.empty())
@@ -162,6 +264,13 @@ void add_eval_command(CLI::App& app) {
         "  esf eval --synthetic DB     the database's own views, leave-one-model-out: each\n"
         "                              model's views against all other models' views (with\n"
         "                              --groups, all models of the same group are left out)\n"
+        "  esf eval DB --scenes S.csv  whole labelled scenes, segmented and recognised as by\n"
+        "                              esf scene: S.csv has the columns scene_file (an\n"
+        "                              organised PCD with a per-point label field, label / 10 =\n"
+        "                              object id), object_id, class and optionally scene_type.\n"
+        "                              Per object: found (one cluster holds >= 80 % of it and\n"
+        "                              is >= 80 % it), split, merged or missed; end-to-end:\n"
+        "                              found and named right; per scene type and overall\n"
         "Each cloud is described with the database's descriptor and settings and its k nearest\n"
         "views are found (L1, with the learned weights when stored). 1-NN: the nearest view has\n"
         "the true class; k-NN: the true class is among the k nearest views' classes. Printed per\n"
@@ -201,6 +310,18 @@ void add_eval_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--report", args->report,
                     "Write report.json, confusion.png/.svg, rank_curves.svg, index.html to DIR");
+    cmd->add_option("--scenes", args->scenes,
+                    "Evaluate segmentation and recognition on labelled scenes (CSV: scene_file, "
+                    "object_id, class[, scene_type])")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--grouping", args->grouping,
+                    "With --scenes: how points above the table become objects (convexity or "
+                    "euclidean, as in esf segment)")
+        ->transform(CLI::CheckedTransformer(
+            std::map<std::string, Grouping>{{"convexity", Grouping::kConvexity},
+                                            {"euclidean", Grouping::kEuclidean}},
+            CLI::ignore_case))
+        ->default_str("convexity");
     cmd->add_option("--title", args->title, "Title of the report (default: esf eval: DB)");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the tables");
     cmd->callback([args] { run_eval(*args); });

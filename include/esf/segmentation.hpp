@@ -32,9 +32,20 @@
 #include <string>
 #include <vector>
 
+#include "esf/convexity_grouping.hpp"
 #include "esf/point_cloud.hpp"
+#include "esf/surface_patches.hpp"
 
 namespace esf {
+
+/// How the points above the table are grouped into objects.
+enum class Grouping {
+    /// Surface patches joined where the surface is convex (esf/convexity_grouping.hpp): splits
+    /// touching, stacked and leaning objects at the concave creases between them.
+    kConvexity,
+    /// Euclidean clustering: everything that touches is one object.
+    kEuclidean,
+};
 
 /// Thresholds of segment_scene(). Lengths are in metres (the defaults suit Kinect-like sensors at
 /// 0.5 to 2 m; scale them for clouds in other units).
@@ -53,7 +64,13 @@ struct SegmentationOptions {
     float max_height = 0.40f;  ///< m above the plane where objects end (higher points ignored)
     /// Sensor position in the cloud's frame: its side of the plane is "above".
     Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
-    // Clustering.
+    // Grouping.
+    Grouping grouping = Grouping::kConvexity;
+    /// kConvexity: the patches (image tiles for organised clouds, voxels otherwise; their
+    /// viewpoint is replaced by `viewpoint`) and the convexity test.
+    SurfacePatchOptions patches;
+    ConvexityOptions convexity;
+    /// kEuclidean: clustering.
     float cluster_tolerance = 0.02f;           ///< m; largest gap inside one object
     std::size_t min_cluster_points = 100;      ///< full-resolution points, >= 1
     std::size_t max_cluster_points = 1000000;  ///< full-resolution points

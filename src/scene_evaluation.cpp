@@ -1,0 +1,192 @@
+#include "esf/scene_evaluation.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <stdexcept>
+
+#include "csv.hpp"
+#include "esf/cloud_io.hpp"
+#include "esf/error.hpp"
+
+namespace esf {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+        .count();
+}
+
+double ratio(std::size_t a, std::size_t b) {
+    return b ? static_cast<double>(a) / static_cast<double>(b) : 0.0;
+}
+
+}  // namespace
+
+double SceneTypeSummary::found_rate() const { return ratio(found, objects); }
+double SceneTypeSummary::end_to_end() const { return ratio(correct, labelled); }
+
+SceneSet read_scene_set(std::istream& in, const std::string& path) {
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw IoError(file_message(path, 0, "read failed"));
+    const std::vector<detail::CsvRecord> records = detail::parse_csv(text, path);
+    if (records.empty())
+        throw IoError(file_message(
+            path, 0, "empty file (expected a header with scene_file, object_id and class)"));
+    const detail::CsvRecord& header = records.front();
+    const std::size_t none = header.fields.size();
+    const std::size_t file_column = detail::column_of(header, "scene_file");
+    const std::size_t id_column = detail::column_of(header, "object_id");
+    const std::size_t class_column = detail::column_of(header, "class");
+    const std::size_t type_column = detail::column_of(header, "scene_type");
+    for (const auto& [column, name] : {std::pair{file_column, "scene_file"},
+                                       std::pair{id_column, "object_id"},
+                                       std::pair{class_column, "class"}})
+        if (column == none)
+            throw IoError(file_message(path, header.line,
+                                       std::string("the header has no '") + name + "' column"));
+    std::size_t needed = std::max({file_column, id_column, class_column}) + 1;
+    if (type_column != none) needed = std::max(needed, type_column + 1);
+    const fs::path base = fs::path(path).parent_path();
+
+    SceneSet set;
+    set.path = path;
+    std::map<std::string, std::size_t> scene_of;
+    for (std::size_t r = 1; r < records.size(); ++r) {
+        const detail::CsvRecord& record = records[r];
+        auto fail = [&](const std::string& why) {
+            throw IoError(file_message(path, record.line, why));
+        };
+        if (record.fields.size() < needed)
+            fail(std::to_string(record.fields.size()) + " fields, the header needs at least " +
+                 std::to_string(needed));
+        const std::string file = detail::trim(record.fields[file_column]);
+        const std::string id_text = detail::trim(record.fields[id_column]);
+        const std::string class_name = detail::trim(record.fields[class_column]);
+        const std::string type =
+            type_column == none ? std::string() : detail::trim(record.fields[type_column]);
+        if (file.empty()) fail("empty scene_file");
+        if (class_name.empty()) fail("empty class for object " + id_text + " of " + file);
+        std::uint32_t id = 0;
+        {
+            std::size_t used = 0;
+            unsigned long value = 0;
+            try {
+                value = std::stoul(id_text, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (id_text.empty() || used != id_text.size() || id_text[0] == '-' ||
+                value > 0xFFFFFFFFul)
+                fail("object_id is not a non-negative integer: '" + id_text + "'");
+            id = static_cast<std::uint32_t>(value);
+        }
+        const fs::path p(file);
+        const std::string resolved = p.is_absolute() || base.empty() ? file : (base / p).string();
+        auto [it, inserted] = scene_of.try_emplace(resolved, set.scenes.size());
+        if (inserted) set.scenes.push_back({resolved, type, {}});
+        LabelledScene& scene = set.scenes[it->second];
+        if (scene.type != type)
+            fail("scene " + file + " has two types: '" + scene.type + "' and '" + type + "'");
+        for (const SceneObjectLabel& o : scene.objects)
+            if (o.object_id == id && o.class_name != class_name)
+                fail("object " + id_text + " of " + file + " has two classes: '" + o.class_name +
+                     "' and '" + class_name + "'");
+        scene.objects.push_back({id, class_name});
+    }
+    return set;
+}
+
+SceneSet read_scene_set(const std::string& csv) {
+    std::ifstream in(csv, std::ios::binary);
+    if (!in) throw IoError(file_message(csv, 0, "cannot open scene set"));
+    return read_scene_set(in, csv);
+}
+
+SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneSet& set,
+                                      const SceneEvaluationOptions& options) {
+    SceneEvaluationReport report;
+    report.scene_set = set.path;
+    std::map<std::string, SceneTypeSummary> types;
+    double segment_ms = 0.0, recognize_ms = 0.0;
+    std::size_t frames = 0;
+    for (std::size_t s = 0; s < set.scenes.size(); ++s) {
+        const LabelledScene& scene = set.scenes[s];
+        try {
+            const PointCloud cloud = read_cloud(scene.file);
+            if (cloud.labels.size() != cloud.points.size())
+                throw std::invalid_argument("the cloud has no per-point label field");
+            auto start = std::chrono::steady_clock::now();
+            SegmentationResult segmentation = segment_scene(cloud, options.segmentation);
+            segment_ms += ms_since(start);
+            start = std::chrono::steady_clock::now();
+            const SceneRecognition recognition = recognizer.recognize(std::move(segmentation));
+            recognize_ms += ms_since(start);
+            ++frames;
+
+            std::vector<Cluster> clusters;
+            clusters.reserve(recognition.objects.size());
+            for (const RecognizedObject& o : recognition.objects) clusters.push_back(o.cluster);
+            const SegmentationScore score = score_segmentation(
+                cloud.points, cloud.labels, clusters, options.labels, options.criteria);
+
+            for (const std::string& type_name : {scene.type.empty() ? std::string() : scene.type,
+                                                 std::string("all")}) {
+                if (type_name.empty()) continue;
+                SceneTypeSummary& t = types[type_name];
+                t.type = type_name;
+                ++t.scenes;
+                t.clusters += score.clusters;
+                t.background_clusters += score.background_clusters;
+                t.shared_clusters += score.shared_clusters;
+            }
+            for (const ObjectSegmentation& o : score.objects) {
+                SceneObjectOutcome outcome;
+                outcome.scene = scene.file;
+                outcome.type = scene.type;
+                outcome.segmentation = o;
+                for (const SceneObjectLabel& label : scene.objects)
+                    if (label.object_id == o.object_id) outcome.true_class = label.class_name;
+                if (o.cluster >= 0) {
+                    const RecognizedObject& r =
+                        recognition.objects[static_cast<std::size_t>(o.cluster)];
+                    if (r.classified()) outcome.predicted_class = r.classification.class_name;
+                }
+                outcome.correct = o.outcome == SegmentOutcome::kFound &&
+                                  !outcome.true_class.empty() &&
+                                  outcome.predicted_class == outcome.true_class;
+                for (const std::string& type_name :
+                     {scene.type.empty() ? std::string() : scene.type, std::string("all")}) {
+                    if (type_name.empty()) continue;
+                    SceneTypeSummary& t = types[type_name];
+                    ++t.objects;
+                    t.found += o.outcome == SegmentOutcome::kFound;
+                    t.split += o.outcome == SegmentOutcome::kSplit;
+                    t.merged += o.outcome == SegmentOutcome::kMerged;
+                    t.missed += o.outcome == SegmentOutcome::kMissed;
+                    t.labelled += !outcome.true_class.empty();
+                    t.correct += outcome.correct;
+                }
+                report.objects.push_back(std::move(outcome));
+            }
+        } catch (const std::exception& e) {
+            report.failures.push_back({scene.file, e.what()});
+        }
+        if (options.progress) options.progress(s + 1, set.scenes.size());
+    }
+    for (auto& [name, summary] : types)
+        if (name != "all") report.types.push_back(summary);
+    if (types.count("all")) report.types.push_back(types["all"]);
+    if (frames) {
+        report.segment_ms = segment_ms / static_cast<double>(frames);
+        report.recognize_ms = recognize_ms / static_cast<double>(frames);
+    }
+    return report;
+}
+
+}  // namespace esf
