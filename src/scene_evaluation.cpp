@@ -44,9 +44,9 @@ SceneSet read_scene_set(std::istream& in, const std::string& path) {
     const std::size_t id_column = detail::column_of(header, "object_id");
     const std::size_t class_column = detail::column_of(header, "class");
     const std::size_t type_column = detail::column_of(header, "scene_type");
-    for (const auto& [column, name] : {std::pair{file_column, "scene_file"},
-                                       std::pair{id_column, "object_id"},
-                                       std::pair{class_column, "class"}})
+    for (const auto& [column, name] :
+         {std::pair{file_column, "scene_file"}, std::pair{id_column, "object_id"},
+          std::pair{class_column, "class"}})
         if (column == none)
             throw IoError(file_message(path, header.line,
                                        std::string("the header has no '") + name + "' column"));
@@ -132,11 +132,11 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
             std::vector<Cluster> clusters;
             clusters.reserve(recognition.objects.size());
             for (const RecognizedObject& o : recognition.objects) clusters.push_back(o.cluster);
-            const SegmentationScore score = score_segmentation(
-                cloud.points, cloud.labels, clusters, options.labels, options.criteria);
+            const SegmentationScore score = score_segmentation(cloud.points, cloud.labels, clusters,
+                                                               options.labels, options.criteria);
 
-            for (const std::string& type_name : {scene.type.empty() ? std::string() : scene.type,
-                                                 std::string("all")}) {
+            for (const std::string& type_name :
+                 {scene.type.empty() ? std::string() : scene.type, std::string("all")}) {
                 if (type_name.empty()) continue;
                 SceneTypeSummary& t = types[type_name];
                 t.type = type_name;

@@ -22,9 +22,9 @@ const char* to_string(SegmentOutcome outcome) {
 }
 
 std::size_t SegmentationScore::count(SegmentOutcome outcome) const {
-    return static_cast<std::size_t>(std::count_if(
-        objects.begin(), objects.end(),
-        [&](const ObjectSegmentation& o) { return o.outcome == outcome; }));
+    return static_cast<std::size_t>(
+        std::count_if(objects.begin(), objects.end(),
+                      [&](const ObjectSegmentation& o) { return o.outcome == outcome; }));
 }
 
 SegmentationScore score_segmentation(std::span<const Eigen::Vector3f> points,
@@ -89,9 +89,9 @@ SegmentationScore score_segmentation(std::span<const Eigen::Vector3f> points,
         }
         if (o.cluster >= 0) {
             o.coverage = static_cast<double>(o.in_cluster) / static_cast<double>(count);
-            o.purity = static_cast<double>(o.in_cluster) /
-                       static_cast<double>(clusters[static_cast<std::size_t>(o.cluster)]
-                                               .indices.size());
+            o.purity =
+                static_cast<double>(o.in_cluster) /
+                static_cast<double>(clusters[static_cast<std::size_t>(o.cluster)].indices.size());
             if (o.coverage >= criteria.min_coverage && o.purity >= criteria.min_purity)
                 o.outcome = SegmentOutcome::kFound;
             else if (o.purity < criteria.min_purity)

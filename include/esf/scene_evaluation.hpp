@@ -69,8 +69,8 @@ struct SceneTypeSummary {
     std::string type;  ///< "all" for the overall row
     std::size_t scenes = 0, objects = 0, found = 0, split = 0, merged = 0, missed = 0;
     std::size_t clusters = 0, background_clusters = 0, shared_clusters = 0;
-    std::size_t labelled = 0;  ///< objects with a class
-    std::size_t correct = 0;   ///< of them: found and named right
+    std::size_t labelled = 0;   ///< objects with a class
+    std::size_t correct = 0;    ///< of them: found and named right
     double found_rate() const;  ///< found / objects
     double end_to_end() const;  ///< correct / labelled
 };
@@ -85,8 +85,8 @@ struct SceneEvaluationReport {
     std::vector<SceneObjectOutcome> objects;
     std::vector<SceneTypeSummary> types;  ///< by type name, then "all"
     std::vector<SceneFailure> failures;   ///< scenes that could not be read or segmented
-    double segment_ms = 0.0;    ///< mean per frame
-    double recognize_ms = 0.0;  ///< mean per frame: describe + classify every cluster
+    double segment_ms = 0.0;              ///< mean per frame
+    double recognize_ms = 0.0;            ///< mean per frame: describe + classify every cluster
 };
 
 /// Evaluates every scene of `set` with `recognizer` (its database's descriptor and settings).

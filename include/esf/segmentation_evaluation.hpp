@@ -43,12 +43,12 @@ const char* to_string(SegmentOutcome outcome);
 
 struct ObjectSegmentation {
     std::uint32_t object_id = 0;
-    std::size_t points = 0;          ///< finite labelled points
-    std::ptrdiff_t cluster = -1;     ///< index of the cluster holding most of them; -1: none
-    std::size_t in_cluster = 0;      ///< of its points in that cluster
-    double coverage = 0.0;           ///< in_cluster / points
-    double purity = 0.0;             ///< in_cluster / that cluster's size
-    std::size_t parts = 0;           ///< clusters holding at least min_share of its points
+    std::size_t points = 0;       ///< finite labelled points
+    std::ptrdiff_t cluster = -1;  ///< index of the cluster holding most of them; -1: none
+    std::size_t in_cluster = 0;   ///< of its points in that cluster
+    double coverage = 0.0;        ///< in_cluster / points
+    double purity = 0.0;          ///< in_cluster / that cluster's size
+    std::size_t parts = 0;        ///< clusters holding at least min_share of its points
     SegmentOutcome outcome = SegmentOutcome::kMissed;
 };
 

@@ -28,11 +28,11 @@
 namespace esf {
 
 struct SurfacePatchOptions {
-    std::uint32_t tile_pixels = 6;       ///< organised: tile side in pixels, >= 2
-    float voxel_size = 0.015f;           ///< unorganised: voxel side, > 0 (m)
-    float depth_jump = 0.01f;            ///< m, >= 0
-    float depth_jump_quadratic = 0.01f;  ///< 1/m, >= 0
-    std::uint32_t min_normal_points = 6; ///< >= 3
+    std::uint32_t tile_pixels = 6;        ///< organised: tile side in pixels, >= 2
+    float voxel_size = 0.015f;            ///< unorganised: voxel side, > 0 (m)
+    float depth_jump = 0.01f;             ///< m, >= 0
+    float depth_jump_quadratic = 0.01f;   ///< 1/m, >= 0
+    std::uint32_t min_normal_points = 6;  ///< >= 3
     Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
 };
 
@@ -46,8 +46,8 @@ struct SurfacePatch {
 };
 
 struct PatchEdge {
-    std::uint32_t a = 0, b = 0;     ///< patch ids, a < b
-    std::uint32_t contacts = 0;     ///< neighbouring point pairs across the border (>= 1)
+    std::uint32_t a = 0, b = 0;  ///< patch ids, a < b
+    std::uint32_t contacts = 0;  ///< neighbouring point pairs across the border (>= 1)
 };
 
 struct PatchGraph {
