@@ -27,6 +27,8 @@ void validate(const ConvexityOptions& o) {
     if (!(o.concavity_tolerance_deg >= 0.0f && o.concavity_tolerance_deg < 90.0f))
         fail("concavity_tolerance_deg must be in [0, 90), got " +
              std::to_string(o.concavity_tolerance_deg));
+    if (!(o.lip_angle_deg >= 0.0f && o.lip_angle_deg <= 90.0f))
+        fail("lip_angle_deg must be in [0, 90], got " + std::to_string(o.lip_angle_deg));
     if (!(o.sanity_angle_deg >= 0.0f && o.sanity_angle_deg <= 90.0f))
         fail("sanity_angle_deg must be in [0, 90], got " + std::to_string(o.sanity_angle_deg));
 }
@@ -41,9 +43,12 @@ bool convex_connection(const SurfacePatch& a, const SurfacePatch& b,
     if (!(distance > 0.0f)) return false;
     const Eigen::Vector3f d = offset / distance;
     if ((a.normal - b.normal).dot(d) <= 0.0f) return false;  // concave
+    // Nearly opposite normals, convex: the two sides of a thin wall meeting at its rim (a cup's
+    // or a bowl's lip); the crease direction is too ill-conditioned to test.
+    if (cos_between <= std::cos(radians(180.0f - options.lip_angle_deg))) return true;
     const Eigen::Vector3f crease = a.normal.cross(b.normal);
     const float crease_norm = crease.norm();
-    if (!(crease_norm > 0.0f)) return true;  // opposite normals: no crease direction to test
+    if (!(crease_norm > 0.0f)) return true;
     const float cos_to_crease = std::abs(d.dot(crease)) / crease_norm;
     return cos_to_crease <= std::cos(radians(options.sanity_angle_deg));
 }

@@ -12,6 +12,7 @@
 
 #include "disjoint_sets.hpp"
 #include "esf/parallel.hpp"
+#include "occluded_parts.hpp"
 
 namespace esf {
 
@@ -631,6 +632,9 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
         component.resize(candidates.size());
         for (std::size_t k = 0; k < candidates.size(); ++k)
             component[k] = segment[graph.patch_of[k]];
+        if (organised && options.join_occluded_parts)
+            detail::join_occluded_parts(points, width, height, candidates, component,
+                                        options.viewpoint, plane.normal, plane.d);
     } else {
         const float side = cell_side(options.cluster_tolerance);
         for (const std::uint32_t i : candidates)

@@ -48,8 +48,12 @@ TEST(ConvexConnection, HandComputedCorners) {
     esf::ConvexityOptions no_sanity;
     no_sanity.sanity_angle_deg = 0.0f;
     EXPECT_TRUE(esf::convex_connection(a, b, no_sanity));
-    EXPECT_THROW(esf::convex_segments({}, esf::ConvexityOptions{90.0f, 60.0f, 1}),
-                 std::invalid_argument);
+    esf::ConvexityOptions bad;
+    bad.concavity_tolerance_deg = 90.0f;
+    EXPECT_THROW(esf::convex_segments({}, bad), std::invalid_argument);
+    bad = {};
+    bad.lip_angle_deg = -1.0f;
+    EXPECT_THROW(esf::convex_segments({}, bad), std::invalid_argument);
 }
 
 TEST(ConvexSegments, SmallSegmentsJoinTheNeighbourTheyTouchMost) {
@@ -83,8 +87,7 @@ std::size_t objects_found(const esf::test::CastScene& scene, const esf::Segmenta
         for (const esf::Cluster& c : r.clusters) {
             std::size_t mine = 0;
             for (const std::uint32_t i : c.indices) mine += scene.owner[i] == k;
-            if (10 * mine >= 8 * total && 10 * mine >= 8 * c.indices.size())
-                ++found;
+            if (10 * mine >= 8 * total && 10 * mine >= 8 * c.indices.size()) ++found;
         }
     }
     return found;

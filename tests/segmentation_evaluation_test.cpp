@@ -65,9 +65,8 @@ TEST(ScoreSegmentation, RefusesMismatchedInput) {
                  std::invalid_argument);
     esf::SegmentationCriteria bad;
     bad.min_purity = 0.0;
-    EXPECT_THROW(
-        esf::score_segmentation(points, std::vector<std::uint32_t>{1, 2, 3}, {}, {}, bad),
-        std::invalid_argument);
+    EXPECT_THROW(esf::score_segmentation(points, std::vector<std::uint32_t>{1, 2, 3}, {}, {}, bad),
+                 std::invalid_argument);
 }
 
 }  // namespace

@@ -14,7 +14,8 @@
 //   - convex: (n1 - n2) . d > 0 (the normals open away from each other), and the connection is
 //     not singular: the angle between d and the crease direction n1 x n2 is at least
 //     `sanity_angle` (LCCP's sanity criterion: patches touching along the crease only at a
-//     point of it are no evidence of convexity);
+//     point of it are no evidence of convexity), except where the normals are nearly
+//     opposite (within `lip_angle` of 180 degrees: the two sides of a thin wall at its rim);
 //   - otherwise concave: the edge is cut.
 // Patches without a normal join nothing at first. Segments smaller than `min_segment_points`
 // then join, smallest first, the neighbouring segment they share the most contacts with (LCCP's
@@ -31,6 +32,9 @@ namespace esf {
 struct ConvexityOptions {
     float concavity_tolerance_deg = 25.0f;  ///< [0, 90)
     float sanity_angle_deg = 60.0f;         ///< [0, 90]
+    /// Convex joins of patches whose normals are within this of opposite are a thin wall's rim
+    /// and join without the sanity test; [0, 90], 0 = never.
+    float lip_angle_deg = 30.0f;
     std::uint32_t min_segment_points = 150;
 };
 

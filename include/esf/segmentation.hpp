@@ -70,6 +70,9 @@ struct SegmentationOptions {
     /// viewpoint is replaced by `viewpoint`) and the convexity test.
     SurfacePatchOptions patches;
     ConvexityOptions convexity;
+    /// kConvexity, organised clouds: planar groups on either side of an occluder in front of
+    /// them, lying in one plane, are one object (a box seen on both sides of a can).
+    bool join_occluded_parts = true;
     /// kEuclidean: clustering.
     float cluster_tolerance = 0.02f;           ///< m; largest gap inside one object
     std::size_t min_cluster_points = 100;      ///< full-resolution points, >= 1
