@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "container_parts.hpp"
 #include "disjoint_sets.hpp"
 #include "esf/parallel.hpp"
 #include "occluded_parts.hpp"
@@ -635,6 +636,8 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
         if (organised && options.join_occluded_parts)
             detail::join_occluded_parts(points, width, height, candidates, component,
                                         options.viewpoint, plane.normal, plane.d);
+        if (options.join_container_parts)
+            detail::join_container_parts(candidate_points, component, plane.normal, plane.d);
     } else {
         const float side = cell_side(options.cluster_tolerance);
         for (const std::uint32_t i : candidates)

@@ -73,6 +73,9 @@ struct SegmentationOptions {
     /// kConvexity, organised clouds: planar groups on either side of an occluder in front of
     /// them, lying in one plane, are one object (a box seen on both sides of a can).
     bool join_occluded_parts = true;
+    /// kConvexity: a group whose footprint on the plane lies within another group's round
+    /// footprint is its inside (a cup's, a bowl's or a pot's inner wall and bottom).
+    bool join_container_parts = true;
     /// kEuclidean: clustering.
     float cluster_tolerance = 0.02f;           ///< m; largest gap inside one object
     std::size_t min_cluster_points = 100;      ///< full-resolution points, >= 1
