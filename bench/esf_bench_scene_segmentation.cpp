@@ -1,11 +1,18 @@
 // Segmentation quality and time on labelled organised scenes, per scene type: objects found as
 // one cluster (esf/segmentation_evaluation.hpp), split, merged, missed, and milliseconds per
-// frame (best of 3), for convexity grouping and Euclidean clustering side by side.
+// frame (best of 3), for convexity grouping, Euclidean clustering and PCL's LCCP (supervoxels +
+// local convexity, Stein et al. 2014, PCL's example settings) side by side. LCCP runs on the
+// same points above the table as ours (the union of Euclidean clusters of one point or more);
+// its time is LCCP alone, without the plane fit.
 //
 //   esf_bench_scene_segmentation [SCENE_DIR]     (default: $ESF_DATA/real/scenes)
 //
 // Scene types follow the mOSD learn split's numbering (0-16 boxes, 17-24 stacked boxes, 25-32
 // occluded objects, 33-44 cylindric objects); other file names count as "other".
+
+#include <pcl/point_types.h>
+#include <pcl/segmentation/lccp_segmentation.h>
+#include <pcl/segmentation/supervoxel_clustering.h>
 
 #include <algorithm>
 #include <chrono>
@@ -52,6 +59,53 @@ struct Tally {
     }
 };
 
+/// PCL's LCCP on the given points of `cloud` (indices): clusters of at least `min_points`.
+std::vector<esf::Cluster> lccp_clusters(const esf::PointCloud& cloud,
+                                        const std::vector<std::uint32_t>& indices,
+                                        std::size_t min_points) {
+    using PointT = pcl::PointXYZRGBA;
+    pcl::PointCloud<PointT>::Ptr input(new pcl::PointCloud<PointT>);
+    for (const std::uint32_t i : indices) {
+        PointT p;
+        p.x = cloud.points[i].x();
+        p.y = cloud.points[i].y();
+        p.z = cloud.points[i].z();
+        p.rgba = 0;
+        input->push_back(p);
+    }
+    const float voxel_resolution = 0.0075f, seed_resolution = 0.03f;
+    pcl::SupervoxelClustering<PointT> super(voxel_resolution, seed_resolution);
+    super.setUseSingleCameraTransform(false);
+    super.setInputCloud(input);
+    super.setColorImportance(0.0f);
+    super.setSpatialImportance(1.0f);
+    super.setNormalImportance(4.0f);
+    std::map<std::uint32_t, pcl::Supervoxel<PointT>::Ptr> supervoxels;
+    super.extract(supervoxels);
+    std::multimap<std::uint32_t, std::uint32_t> adjacency;
+    super.getSupervoxelAdjacency(adjacency);
+    pcl::LCCPSegmentation<PointT> lccp;
+    lccp.setConcavityToleranceThreshold(10.0f);
+    lccp.setSanityCheck(true);
+    lccp.setSmoothnessCheck(true, voxel_resolution, seed_resolution, 0.1f);
+    lccp.setKFactor(0);
+    lccp.setInputSupervoxels(supervoxels, adjacency);
+    lccp.setMinSegmentSize(3);
+    lccp.segment();
+    pcl::PointCloud<pcl::PointXYZL>::Ptr labelled = super.getLabeledCloud();
+    lccp.relabelCloud(*labelled);
+    std::map<std::uint32_t, esf::Cluster> by_label;
+    for (std::size_t k = 0; k < labelled->size() && k < indices.size(); ++k) {
+        const std::uint32_t label = (*labelled)[k].label;
+        if (label == 0) continue;
+        by_label[label].indices.push_back(indices[k]);
+    }
+    std::vector<esf::Cluster> clusters;
+    for (auto& [label, c] : by_label)
+        if (c.indices.size() >= min_points) clusters.push_back(std::move(c));
+    return clusters;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -74,6 +128,26 @@ int main(int argc, char** argv) {
         const esf::PointCloud cloud = esf::read_cloud(file.string());
         if (cloud.labels.empty()) continue;
         const std::string type = scene_type(file.filename().string());
+        {
+            esf::SegmentationOptions all;
+            all.grouping = esf::Grouping::kEuclidean;
+            all.min_cluster_points = 1;
+            all.threads = 1;
+            std::vector<std::uint32_t> above;
+            for (const esf::Cluster& c : esf::segment_scene(cloud, all).clusters)
+                above.insert(above.end(), c.indices.begin(), c.indices.end());
+            std::sort(above.begin(), above.end());
+            const auto start = std::chrono::steady_clock::now();
+            const std::vector<esf::Cluster> clusters =
+                lccp_clusters(cloud, above, esf::SegmentationOptions{}.min_cluster_points);
+            const double ms =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                    .count();
+            const esf::SegmentationScore score =
+                esf::score_segmentation(cloud.points, cloud.labels, clusters);
+            tallies["pcl-lccp"][type].add(score, ms);
+            tallies["pcl-lccp"]["all"].add(score, ms);
+        }
         for (const auto& [name, grouping] : methods) {
             esf::SegmentationOptions options;
             options.grouping = grouping;

@@ -9,6 +9,7 @@
 //   - at least `min_inside` of the inner group's projected points lie within the radius plus
 //     `margin`, and the inner group does not rise above the outer one's top by more than
 //     `margin` (a box standing behind a can is outside its circle, one standing on it above).
+// And two groups whose upper parts lie on one circle are parts of one round wall (below).
 // Groups of fewer than min_points points take no part. `component` is renumbered in order of
 // first appearance.
 
@@ -25,6 +26,15 @@ struct ContainerPartsOptions {
     float max_residual = 0.15f;  ///< of the radius
     float margin = 0.01f;        ///< m
     float min_inside = 0.9f;     ///< share of the inner group's points
+    /// Two groups whose upper parts (points above rim_band x their top height) lie together on
+    /// one circle (RMS residual <= max_shared_residual x radius) are two parts of one round
+    /// wall: the outside and inside of a bowl, or an inside cut in two.
+    /// Each group's upper part must fit that circle too, whose radius is at most
+    /// max_shared_radius, and the two upper parts must be near each other.
+    float rim_band = 0.6f;
+    float max_shared_residual = 0.08f;
+    float max_shared_radius = 0.12f;  ///< m
+    float max_shared_gap = 0.02f;     ///< m between the upper parts' bounding boxes
     std::uint32_t min_points = 200;
 };
 

@@ -27,6 +27,8 @@ void validate(const ConvexityOptions& o) {
     if (!(o.concavity_tolerance_deg >= 0.0f && o.concavity_tolerance_deg < 90.0f))
         fail("concavity_tolerance_deg must be in [0, 90), got " +
              std::to_string(o.concavity_tolerance_deg));
+    if (o.smoothing_passes < 0 || o.smoothing_passes > 16)
+        fail("smoothing_passes must be in [0, 16], got " + std::to_string(o.smoothing_passes));
     if (!(o.lip_angle_deg >= 0.0f && o.lip_angle_deg <= 90.0f))
         fail("lip_angle_deg must be in [0, 90], got " + std::to_string(o.lip_angle_deg));
     if (!(o.sanity_angle_deg >= 0.0f && o.sanity_angle_deg <= 90.0f))
@@ -57,10 +59,30 @@ std::vector<std::uint32_t> convex_segments(const PatchGraph& graph,
                                            const ConvexityOptions& options) {
     validate(options);
     const std::size_t n = graph.patches.size();
+    // Normals smoothed over the smooth neighbourhood (bilateral: neighbours across a crease do
+    // not count), so that sensor noise does not fake concave creases on curved walls.
+    std::vector<SurfacePatch> patches = graph.patches;
+    if (options.smoothing_passes > 0) {
+        const float cos_smooth = std::cos(radians(options.concavity_tolerance_deg));
+        for (int pass = 0; pass < options.smoothing_passes; ++pass) {
+            std::vector<Eigen::Vector3f> sum(n, Eigen::Vector3f::Zero());
+            for (std::size_t p = 0; p < n; ++p)
+                sum[p] = static_cast<float>(patches[p].points) * patches[p].normal;
+            for (const PatchEdge& e : graph.edges) {
+                const SurfacePatch &a = patches[e.a], &b = patches[e.b];
+                if (!a.has_normal() || !b.has_normal() || a.normal.dot(b.normal) < cos_smooth)
+                    continue;
+                sum[e.a] += static_cast<float>(b.points) * b.normal;
+                sum[e.b] += static_cast<float>(a.points) * a.normal;
+            }
+            for (std::size_t p = 0; p < n; ++p)
+                if (patches[p].has_normal() && sum[p].squaredNorm() > 0.0f)
+                    patches[p].normal = sum[p].normalized();
+        }
+    }
     DisjointSets sets(n);
     for (const PatchEdge& e : graph.edges)
-        if (convex_connection(graph.patches[e.a], graph.patches[e.b], options))
-            sets.unite(e.a, e.b);
+        if (convex_connection(patches[e.a], patches[e.b], options)) sets.unite(e.a, e.b);
 
     // Points per segment (indexed by root).
     std::vector<std::uint64_t> size(n, 0);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "test_data.hpp"
 
 namespace fs = std::filesystem;
 using esf::test::CliRun;
@@ -224,6 +225,59 @@ TEST_F(CliEvalTest, BadInputIsOneLineAndAnExitCode) {
         EXPECT_EQ(lines(run.err), 1u) << run.err;
         EXPECT_EQ(run.err.rfind("esf: error: " + corrupt.string(), 0), 0u) << run.err;
     }
+}
+
+// `esf eval DB --scenes`: two labelled real scenes (a box standing on a box, a box seen on both
+// sides of an occluder) through segmentation and recognition; the database's classes are not
+// the scenes', so only the segmentation figures are checked.
+TEST_F(CliEvalTest, ScenesThroughSegmentationAndRecognition) {
+    ESF_REQUIRE_DATA("real/scenes/mosd_learn28.pcd");
+    const fs::path scenes = dir() / "scenes.csv";
+    const std::string stacked = esf::test::data_file("real/scenes/mosd_learn20.pcd").string();
+    const std::string occluded = esf::test::data_file("real/scenes/mosd_learn28.pcd").string();
+    std::ofstream(scenes) << "scene_file,object_id,class,scene_type\n"
+                          << stacked << ",2,box,stacked\n"
+                          << stacked << ",3,box,stacked\n"
+                          << occluded << ",2,box,occluded\n"
+                          << occluded << ",3,box,occluded\n";
+    CliRun run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes) + " --json");
+    ASSERT_EQ(run.code, 0) << run.err;
+    nlohmann::json j = nlohmann::json::parse(run.out);
+    ASSERT_EQ(j["types"].size(), 3u);  // occluded, stacked, all
+    const nlohmann::json& all = j["types"][2];
+    EXPECT_EQ(all["type"], "all");
+    EXPECT_EQ(all["scenes"], 2);
+    EXPECT_EQ(all["objects"], 4);
+    EXPECT_EQ(all["found"], 4);
+    EXPECT_EQ(all["labelled"], 4);
+    EXPECT_EQ(j["objects"].size(), 4u);
+    EXPECT_EQ(j["objects"][0]["outcome"], "found");
+    EXPECT_EQ(j["objects"][0]["class"], "box");
+    EXPECT_GT(j["timings"]["segment_ms_per_frame"].get<double>(), 0.0);
+
+    // Euclidean clustering glues the stacked boxes and splits the occluded one.
+    run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes) + " --grouping euclidean " +
+              "--json");
+    ASSERT_EQ(run.code, 0) << run.err;
+    j = nlohmann::json::parse(run.out);
+    EXPECT_EQ(j["types"][2]["found"], 1);
+    EXPECT_EQ(j["types"][1]["merged"], 2);
+
+    // The table.
+    run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes));
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_NE(run.out.find("stacked"), std::string::npos) << run.out;
+    EXPECT_NE(run.out.find("end-to-end"), std::string::npos) << run.out;
+
+    // Usage errors: 1; a bad scene set: 2, one line naming the file and line.
+    EXPECT_EQ(
+        esf("eval " + quoted(db()) + " " + quoted(set()) + " --scenes " + quoted(scenes)).code, 1);
+    const fs::path bad = dir() / "bad_scenes.csv";
+    std::ofstream(bad) << "scene_file,object_id,class\nx.pcd,two,box\n";
+    run = esf("eval " + quoted(db()) + " --scenes " + quoted(bad));
+    EXPECT_EQ(run.code, 2);
+    EXPECT_EQ(run.err, "esf: error: " + bad.string() +
+                           ":2: object_id is not a non-negative integer: 'two'\n");
 }
 
 TEST_F(CliEvalTest, HelpDescribesEveryOption) {

@@ -585,6 +585,8 @@ TEST_F(RecognizerTest, SyntheticSceneWithTwoObjects) {
         const esf::Recognizer recognizer(db_path_, options);
         esf::SegmentationOptions segmentation;
         segmentation.threads = threads;
+        // The objects stand apart; convexity grouping cuts the mug's handle off at its joints.
+        segmentation.grouping = esf::Grouping::kEuclidean;
         const esf::SceneRecognition result = recognizer.recognize_scene(scene, segmentation);
         EXPECT_TRUE(result.plane_found);
         ASSERT_EQ(result.objects.size(), 2u) << result.message;
@@ -624,6 +626,7 @@ TEST_F(RecognizerTest, ClustersThatCannotBeDescribedAreReportedPerObject) {
     for (int k = 0; k < 40; ++k) scene.push_back({-0.3f, 0.3f, 0.98f - 0.004f * float(k)});
     esf::SegmentationOptions segmentation;
     segmentation.min_cluster_points = 1;
+    segmentation.grouping = esf::Grouping::kEuclidean;  // a solid block: no surface to patch
     const esf::Recognizer recognizer(db_path_);
     const esf::SceneRecognition result = recognizer.recognize_scene(
         esf::PointCloud{scene, static_cast<std::uint32_t>(scene.size()), 1, {}}, segmentation);

@@ -17,10 +17,12 @@
 //     point of it are no evidence of convexity), except where the normals are nearly
 //     opposite (within `lip_angle` of 180 degrees: the two sides of a thin wall at its rim);
 //   - otherwise concave: the edge is cut.
-// Patches without a normal join nothing at first. Segments smaller than `min_segment_points`
-// then join, smallest first, the neighbouring segment they share the most contacts with (LCCP's
-// merging of small segments): a patch torn by noise or a sliver along a crease goes to one side.
-// Segments are numbered in order of their first patch; the result is deterministic.
+// The normals are first smoothed over smooth neighbours (`smoothing_passes`), so that depth
+// noise on a curved wall does not fake a crease. Patches without a normal join nothing at first.
+// Segments smaller than `min_segment_points` then join, smallest first, the neighbouring segment
+// they share the most contacts with (LCCP's merging of small segments): a patch torn by noise or a
+// sliver along a crease goes to one side. Segments are numbered in order of their first patch; the
+// result is deterministic.
 
 #include <cstdint>
 #include <vector>
@@ -36,6 +38,10 @@ struct ConvexityOptions {
     /// and join without the sanity test; [0, 90], 0 = never.
     float lip_angle_deg = 30.0f;
     std::uint32_t min_segment_points = 150;
+    /// Passes of bilateral normal smoothing before the test: each patch's normal becomes the
+    /// point-weighted mean of its own and its smooth neighbours' (those within the concavity
+    /// tolerance), which damps sensor noise but keeps creases; 0 = none.
+    int smoothing_passes = 1;
 };
 
 /// Throws std::invalid_argument when an option is out of range.

@@ -1,11 +1,11 @@
 #pragma once
 // Table-scene segmentation: the dominant plane is found by RANSAC, the points standing on it
-// (above it on the sensor's side, inside its convex hull) are grouped by Euclidean clustering,
-// and each group comes back at full resolution with its centroid and size.
+// (above it on the sensor's side, inside its convex hull) are grouped into objects, and each
+// object comes back at full resolution with its centroid and size.
 //
-// The steps (Rusu et al., "Close-range scene segmentation and reconstruction of 3D point cloud
-// maps for mobile manipulation in domestic environments", IROS 2009; the pipeline behind PCL's
-// tabletop segmentation):
+// The steps (the table and prism after Rusu et al., "Close-range scene segmentation and
+// reconstruction of 3D point cloud maps for mobile manipulation in domestic environments", IROS
+// 2009; the grouping after Stein et al., "Object partitioning using local convexity", CVPR 2014):
 //   1. plane fit on an even subsample of the finite points (every k-th point, k chosen so that
 //      about `plane_samples` remain): RANSAC with per-hypothesis generators derived from
 //      (seed, hypothesis index), then a least-squares refit to the sampled inliers;
@@ -17,8 +17,15 @@
 //   4. candidates: full-resolution points between `min_height` and `max_height` above the plane
 //      whose projection lies inside the hull (the polygonal prism of PCL's
 //      ExtractPolygonalPrismData);
-//   5. Euclidean clustering: two candidates belong to one cluster when a chain of candidates
-//      links them with steps of at most `cluster_tolerance` (the clusters of PCL's
+//   5. grouping (`grouping`):
+//      kConvexity (default): small surface patches (esf/surface_patches.hpp: image tiles of an
+//      organised frame, voxels otherwise) join where the surface between them is convex or
+//      nearly flat (esf/convexity_grouping.hpp), so touching, stacked and leaning objects part
+//      at the concave creases between them; then, in organised frames, the parts of an object
+//      cut apart by an occluder in front of it join (src/occluded_parts.hpp), and in any cloud
+//      a container's inside joins its outside (src/container_parts.hpp);
+//      kEuclidean: two candidates belong to one cluster when a chain of candidates links them
+//      with steps of at most `cluster_tolerance` (the clusters of PCL's
 //      EuclideanClusterExtraction, found on a hash grid instead of a k-d tree);
 //   6. clusters with fewer than `min_cluster_points` or more than `max_cluster_points`
 //      full-resolution points are dropped; the others are sorted by point count (descending),
