@@ -1,11 +1,22 @@
 #include "cli_scene.hpp"
 
 #include <filesystem>
-#include <map>
 
 #include "esf/cloud_io.hpp"
 
 namespace esf::cli {
+
+void add_grouping_option(CLI::App& cmd, Grouping& grouping, const std::string& help) {
+    cmd.add_option_function<std::string>(
+           "--grouping",
+           [&grouping](const std::string& value) {
+               grouping = value == "euclidean" ? Grouping::kEuclidean : Grouping::kConvexity;
+           },
+           help)
+        ->check(CLI::IsMember({"convexity", "euclidean"}))
+        ->type_name("convexity|euclidean")
+        ->default_str("convexity");
+}
 
 void add_depth_png_options(CLI::App& cmd, SceneInputArgs& args) {
     cmd.add_flag("--depth-png", args.depth_png,
@@ -48,15 +59,11 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
                    "Sensor position x y z in the cloud's frame (m); its side of the plane is up")
         ->expected(3)
         ->capture_default_str();
-    cmd.add_option("--grouping", o.grouping,
-                   "How points above the table become objects: convexity (surface patches "
-                   "joined where the surface is convex; splits touching, stacked and leaning "
-                   "objects at the creases between them) or euclidean (all that touches is one)")
-        ->transform(CLI::CheckedTransformer(
-            std::map<std::string, Grouping>{{"convexity", Grouping::kConvexity},
-                                            {"euclidean", Grouping::kEuclidean}},
-            CLI::ignore_case))
-        ->default_str("convexity");
+    add_grouping_option(cmd, o.grouping,
+                        "How points above the table become objects: convexity (surface patches "
+                        "joined where the surface is convex; splits touching, stacked and leaning "
+                        "objects at the creases between them) or euclidean (all that touches is "
+                        "one)");
     cmd.add_option("--concavity-tolerance", o.convexity.concavity_tolerance_deg,
                    "Convexity grouping: neighbouring patches whose normals differ by less than "
                    "this join even where the surface is concave (degrees)")

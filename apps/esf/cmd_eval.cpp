@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -13,6 +12,7 @@
 #include "cli_common.hpp"
 #include "cli_evaluate.hpp"
 #include "cli_recognize.hpp"
+#include "cli_scene.hpp"
 #include "commands.hpp"
 #include "esf/evaluation.hpp"
 #include "esf/recognizer.hpp"
@@ -314,14 +314,9 @@ void add_eval_command(CLI::App& app) {
                     "Evaluate segmentation and recognition on labelled scenes (CSV: scene_file, "
                     "object_id, class[, scene_type])")
         ->check(CLI::ExistingFile);
-    cmd->add_option("--grouping", args->grouping,
-                    "With --scenes: how points above the table become objects (convexity or "
-                    "euclidean, as in esf segment)")
-        ->transform(CLI::CheckedTransformer(
-            std::map<std::string, Grouping>{{"convexity", Grouping::kConvexity},
-                                            {"euclidean", Grouping::kEuclidean}},
-            CLI::ignore_case))
-        ->default_str("convexity");
+    add_grouping_option(*cmd, args->grouping,
+                        "With --scenes: how points above the table become objects (as in esf "
+                        "segment)");
     cmd->add_option("--title", args->title, "Title of the report (default: esf eval: DB)");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the tables");
     cmd->callback([args] { run_eval(*args); });

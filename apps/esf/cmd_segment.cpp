@@ -76,18 +76,23 @@ void run_segment(const SegmentArgs& args) {
                         {"inliers", result.plane_inliers}};
     summary["message"] = result.message;
     const SegmentationOptions& o = options;
-    summary["options"] = {{"plane_distance_m", o.plane_distance},
-                          {"plane_iterations", o.plane_iterations},
-                          {"plane_samples", o.plane_samples},
-                          {"min_plane_points", o.min_plane_points},
-                          {"min_plane_fraction", o.min_plane_fraction},
-                          {"min_height_m", o.min_height},
-                          {"max_height_m", o.max_height},
-                          {"viewpoint_m", vec(o.viewpoint)},
-                          {"cluster_tolerance_m", o.cluster_tolerance},
-                          {"min_cluster_points", o.min_cluster_points},
-                          {"max_cluster_points", o.max_cluster_points},
-                          {"seed", o.seed}};
+    summary["options"] = {
+        {"plane_distance_m", o.plane_distance},
+        {"plane_iterations", o.plane_iterations},
+        {"plane_samples", o.plane_samples},
+        {"min_plane_points", o.min_plane_points},
+        {"min_plane_fraction", o.min_plane_fraction},
+        {"min_height_m", o.min_height},
+        {"max_height_m", o.max_height},
+        {"viewpoint_m", vec(o.viewpoint)},
+        {"grouping", o.grouping == Grouping::kConvexity ? "convexity" : "euclidean"},
+        {"concavity_tolerance_deg", o.convexity.concavity_tolerance_deg},
+        {"patch_pixels", o.patches.tile_pixels},
+        {"patch_size_m", o.patches.voxel_size},
+        {"cluster_tolerance_m", o.cluster_tolerance},
+        {"min_cluster_points", o.min_cluster_points},
+        {"max_cluster_points", o.max_cluster_points},
+        {"seed", o.seed}};
     summary["clusters"] = nlohmann::json::array();
     for (std::size_t k = 0; k < result.clusters.size(); ++k) {
         const Cluster& c = result.clusters[k];
