@@ -11,8 +11,6 @@ namespace esf::detail {
 
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-
 struct Circle {
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
     double radius = 0.0;
@@ -135,13 +133,7 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
                 sets.unite(outer, inner);
         }
     }
-    std::vector<std::uint32_t> number(count, kNone);
-    std::uint32_t next = 0;
-    for (std::uint32_t& c : component) {
-        const std::uint32_t root = sets.find(c);
-        if (number[root] == kNone) number[root] = next++;
-        c = number[root];
-    }
+    sets.number_sets(component);
 }
 
 }  // namespace esf::detail

@@ -152,14 +152,9 @@ std::vector<std::uint32_t> convex_segments(const PatchGraph& graph,
         }
     }
 
-    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> number(n, kNone), segment(n);
-    std::uint32_t next = 0;
-    for (std::uint32_t p = 0; p < n; ++p) {
-        const std::uint32_t root = sets.find(p);
-        if (number[root] == kNone) number[root] = next++;
-        segment[p] = number[root];
-    }
+    std::vector<std::uint32_t> segment(n);
+    std::iota(segment.begin(), segment.end(), std::uint32_t{0});
+    sets.number_sets(segment);
     return segment;
 }
 

@@ -28,6 +28,19 @@ class DisjointSets {
     }
     std::size_t size() const { return parent_.size(); }
 
+    /// Replaces each id in `ids` (each < size()) by the number of its set, sets numbered
+    /// 0, 1, ... in order of first appearance in `ids`.
+    void number_sets(std::vector<std::uint32_t>& ids) {
+        constexpr std::uint32_t kNone = ~std::uint32_t{0};
+        std::vector<std::uint32_t> number(parent_.size(), kNone);
+        std::uint32_t next = 0;
+        for (std::uint32_t& id : ids) {
+            const std::uint32_t root = find(id);
+            if (number[root] == kNone) number[root] = next++;
+            id = number[root];
+        }
+    }
+
   private:
     std::vector<std::uint32_t> parent_;
 };

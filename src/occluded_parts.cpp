@@ -99,13 +99,7 @@ void join_occluded_parts(std::span<const Eigen::Vector3f> points, std::uint32_t 
             if (std::abs(groups[a].top - groups[b].top) > options.max_top_difference) continue;
             if (hidden_between(a, b)) sets.unite(a, b);
         }
-    std::vector<std::uint32_t> number(count, kNone);
-    std::uint32_t next = 0;
-    for (std::uint32_t& c : component) {
-        const std::uint32_t root = sets.find(c);
-        if (number[root] == kNone) number[root] = next++;
-        c = number[root];
-    }
+    sets.number_sets(component);
 }
 
 }  // namespace esf::detail

@@ -481,16 +481,8 @@ std::vector<std::uint32_t> euclidean_components(std::span<const Eigen::Vector3f>
             if (sets.find(a) != sets.find(b) && linked(a, b)) sets.unite(a, b);
         }
     }
-    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> number(cell_count, kNone);
-    std::vector<std::uint32_t> component(n);
-    std::uint32_t next = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t root = sets.find(cell_of_point[i]);
-        if (number[root] == kNone) number[root] = next++;
-        component[i] = number[root];
-    }
-    return component;
+    sets.number_sets(cell_of_point);
+    return cell_of_point;
 }
 
 // ---------------------------------------------------------------------------------------------

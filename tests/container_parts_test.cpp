@@ -29,7 +29,7 @@ const Vector3f kUp = Vector3f::UnitZ();
 TEST(ContainerParts, InsideJoinsOutsideOfOneCup) {
     std::vector<Vector3f> points;
     std::vector<std::uint32_t> group;
-    add_wall(points, group, 0, 0, 0, 0.040f, -kPi, 0, 0.10f);          // front outside
+    add_wall(points, group, 0, 0, 0, 0.040f, -kPi, 0, 0.10f);           // front outside
     add_wall(points, group, 1, 0, 0, 0.037f, 0.1f, kPi - 0.1f, 0.10f);  // back inside
     esf::detail::join_container_parts(points, group, kUp, 0.0f);
     for (const std::uint32_t g : group) EXPECT_EQ(g, 0u);

@@ -61,15 +61,19 @@ nlohmann::json summary_json(const SceneTypeSummary& t) {
             {"end_to_end", t.end_to_end()}};
 }
 
+RecognizerOptions recognizer_options(const EvalArgs& args) {
+    RecognizerOptions options;
+    options.k = args.k;
+    options.descriptor = args.descriptor;
+    options.use_weights = !args.no_weights;
+    options.threads = args.threads;
+    return options;
+}
+
 /// esf eval DB --scenes SCENES.csv
 void run_scene_eval(const EvalArgs& args) {
     const SceneSet set = read_scene_set(args.scenes);
-    RecognizerOptions recognizer_options;
-    recognizer_options.k = args.k;
-    recognizer_options.descriptor = args.descriptor;
-    recognizer_options.use_weights = !args.no_weights;
-    recognizer_options.threads = args.threads;
-    const Recognizer recognizer(args.database, recognizer_options);
+    const Recognizer recognizer(args.database, recognizer_options(args));
     SceneEvaluationOptions options;
     options.segmentation.grouping = args.grouping;
     options.segmentation.threads = args.threads;
@@ -206,12 +210,7 @@ void run_eval(const EvalArgs& args) {
         report.database = args.database;
     } else {
         const TestSet set = read_test_set(args.test_set);
-        RecognizerOptions recognizer_options;
-        recognizer_options.k = args.k;
-        recognizer_options.descriptor = args.descriptor;
-        recognizer_options.use_weights = !args.no_weights;
-        recognizer_options.threads = args.threads;
-        const Recognizer recognizer(args.database, recognizer_options);
+        const Recognizer recognizer(args.database, recognizer_options(args));
         EvaluationOptions options;
         options.k = args.k;
         options.threads = args.threads;
