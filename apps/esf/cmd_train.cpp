@@ -31,6 +31,10 @@ struct TrainArgs {
     std::string camera = "kinect";
     double fill = 0.5;
     double distance = kTrainingCameraDistance;
+    double max_distance = 0.0;
+    double angles_weight = kEsfAnglesWeight;
+    double min_elevation = -90.0;
+    double max_elevation = 90.0;
     std::size_t min_points = 50;
     std::string catalog;
     bool no_catalog = false;
@@ -52,9 +56,13 @@ void run_train(const TrainArgs& args) {
         options.render.distance = args.distance;
     else
         options.render.distance.reset();
+    if (args.max_distance > 0.0) options.render.max_distance = args.max_distance;
+    options.render.min_elevation = args.min_elevation;
+    options.render.max_elevation = args.max_elevation;
     options.descriptor = args.descriptor;
     options.esf.samples = args.samples;
     options.descriptor_options.samples = args.samples;
+    options.descriptor_options.angles_weight = args.angles_weight;
     options.seed = args.seed;
     options.min_points = args.min_points;
     options.threads = args.threads;
@@ -152,6 +160,10 @@ void add_train_command(CLI::App& app) {
     cmd->add_option("--samples", args->samples,
                     "Point triples per view of esf, sdvs, d2 (paper: 20000)")
         ->capture_default_str();
+    cmd->add_option("--angles-weight", args->angles_weight,
+                    "esf-angles: weight of the surface angle histograms against ESF's 1")
+        ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
     cmd->add_option("--noise", args->noise, "Sensor noise model: kinect or none")
         ->check(CLI::IsMember({"kinect", "none"}))
         ->capture_default_str();
@@ -163,6 +175,19 @@ void add_train_command(CLI::App& app) {
                     "Camera distance from the model's centre, metres (a table-top sensor; models "
                     "too large for it are seen from 1.5 x their radius); 0: use --fill instead")
         ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
+    cmd->add_option("--max-distance", args->max_distance,
+                    "Largest camera distance, metres: each view's distance is drawn from "
+                    "[--distance, --max-distance]; 0: every view at --distance")
+        ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
+    cmd->add_option("--min-elevation", args->min_elevation,
+                    "Lowest camera elevation above the model's xy plane, degrees")
+        ->check(CLI::Range(-90.0, 90.0))
+        ->capture_default_str();
+    cmd->add_option("--max-elevation", args->max_elevation,
+                    "Highest camera elevation above the model's xy plane, degrees")
+        ->check(CLI::Range(-90.0, 90.0))
         ->capture_default_str();
     cmd->add_option("--fill", args->fill,
                     "With --distance 0: fraction of the image side the object spans (PCL's "
