@@ -591,13 +591,14 @@ EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const Descrip
         throw std::invalid_argument(what + ": needs one signature per view and some queries");
     const KnnIndex index = detail::lomo_index(matrix, setup, options.weights, threads);
     // Group ids of the database's models by name, so a query's group is found by its name.
+    // Without groups a model is its own group, named "category/name" in both matrices.
+    const auto model_keys = [](const DescriptorMatrix& m) {
+        std::vector<std::string> keys;
+        for (const auto& model : m.models) keys.push_back(model.category + "/" + model.name);
+        return keys;
+    };
     const std::vector<std::string> names =
-        options.groups.empty() ? [&] {
-            std::vector<std::string> n;
-            for (const auto& m : matrix.models) n.push_back(m.name);
-            return n;
-        }()
-                               : options.groups;
+        options.groups.empty() ? model_keys(matrix) : options.groups;
     std::map<std::string, std::uint32_t> group_id;
     for (std::size_t r = 0; r < matrix.rows(); ++r)
         group_id.emplace(names[matrix.row_info[r].model], setup.view_group[setup.row_views[r]]);
@@ -605,6 +606,8 @@ EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const Descrip
         throw std::invalid_argument(what + ": " + std::to_string(query_groups.size()) +
                                     " query groups for " + std::to_string(queries.models.size()) +
                                     " models");
+    const std::vector<std::string> query_names =
+        query_groups.empty() ? model_keys(queries) : query_groups;
     const std::vector<std::size_t> picked =
         detail::lomo_queries(queries.rows(), options.max_queries);
     std::vector<QueryOutcome> outcomes(picked.size());
@@ -616,12 +619,11 @@ EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const Descrip
         o.file = queries.categories[row.category] + "/" + queries.models[row.model].name + "#" +
                  std::to_string(row.view_index);
         o.true_class = queries.categories[row.category];
-        const std::string& group =
-            query_groups.empty() ? queries.models[row.model].name : query_groups[row.model];
-        const auto it = group_id.find(group);
+        const auto it = group_id.find(query_names[row.model]);
         const std::size_t excluded = it == group_id.end() ? 0 : setup.group_views[it->second];
         const auto t = std::chrono::steady_clock::now();
-        const KnnResult found = index.search(queries.row(picked[q]), options.k + excluded);
+        const KnnResult found =
+            index.search(queries.row(picked[q]), std::min(options.k + excluded, index.views()));
         match_s[q] = seconds_since(t);
         for (const KnnNeighbour& n : found.neighbours) {
             if (it != group_id.end() && setup.view_group[n.view] == it->second) continue;

@@ -425,21 +425,17 @@ MeshRenderer::MeshRenderer(const Mesh& mesh, const RenderOptions& options)
     impl_->radius = mesh.bounding_radius() * impl_->scale * (1.0 + 1e-5);
 
     const CameraIntrinsics& camera = options.camera;
+    if (options.max_distance &&
+        !(std::isfinite(*options.max_distance) && *options.max_distance > 0.0))
+        throw std::invalid_argument("largest camera distance must be positive and finite, got " +
+                                    std::to_string(*options.max_distance));
     if (options.distance) {
         if (!(std::isfinite(*options.distance) && *options.distance > impl_->radius))
             throw std::invalid_argument(
                 "camera distance must be finite and exceed the model's bounding sphere radius (" +
                 std::to_string(impl_->radius) + " m), got " + std::to_string(*options.distance));
         impl_->distance = *options.distance;
-        if (options.max_distance &&
-            !(std::isfinite(*options.max_distance) && *options.max_distance >= *options.distance))
-            throw std::invalid_argument(
-                "largest camera distance must be finite and at least the camera distance (" +
-                std::to_string(*options.distance) + " m), got " +
-                std::to_string(*options.max_distance));
     } else {
-        if (options.max_distance)
-            throw std::invalid_argument("a largest camera distance needs a camera distance");
         // The sphere seen from distance d spans 2 f r / sqrt(d^2 - r^2) pixels.
         const double side = camera.width <= camera.height ? camera.width : camera.height;
         const double f = camera.width <= camera.height ? camera.fx : camera.fy;
@@ -470,7 +466,8 @@ int MeshRenderer::view_index(std::size_t index) const {
 RenderedView MeshRenderer::render_view(std::size_t index) const {
     const auto sphere_index = static_cast<std::size_t>(view_index(index));
     double distance = impl_->distance;
-    if (impl_->options.max_distance) {
+    if (impl_->options.distance && impl_->options.max_distance &&
+        *impl_->options.max_distance > impl_->distance) {
         // A draw of its own: the pixels' noise uses keys below width * height.
         PixelRandom random(impl_->options.seed, sphere_index, ~std::uint64_t{0});
         distance += random.uniform() * (*impl_->options.max_distance - impl_->distance);

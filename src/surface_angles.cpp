@@ -121,7 +121,8 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
         solver.computeDirect(covariance);
         const Eigen::Vector3d values = solver.eigenvalues().cwiseMax(0.0);  // ascending
         const double total = values.sum();
-        if (!(total > 0.0) || values[1] <= 1e-9 * values[2]) continue;  // a point or a line
+        // A point or a line (computeDirect is accurate to about 1e-9 of the largest value).
+        if (!(total > 0.0) || values[1] <= 1e-6 * values[2]) continue;
         Surfel s;
         s.position = cells[i].sum / cells[i].count + lo;
         s.normal = solver.eigenvectors().col(0).normalized();
@@ -145,7 +146,8 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
         centre.norm() > 0.0 ? Eigen::Vector3d(-centre.normalized()) : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d u = mean_normal.norm() > 1e-9 ? mean_normal.normalized() : view;
     double max_distance = 0.0;
-    for (const Surfel& s : surfels) max_distance = std::max(max_distance, (s.position - centre).norm());
+    for (const Surfel& s : surfels)
+        max_distance = std::max(max_distance, (s.position - centre).norm());
 
     std::array<double, kSurfaceAngleSize> counts{};
     constexpr int kAlpha = 0, kPhi = kSurfaceAngleBins, kTheta = 2 * kSurfaceAngleBins,
@@ -155,10 +157,10 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
     std::size_t framed = 0;
     for (const Surfel& s : surfels) {
         const Eigen::Vector3d& n = s.normal;
-        counts[static_cast<std::size_t>(kBeta + bin_of(n.dot(view), -1.0, 1.0,
-                                                        kSurfaceViewpointBins))] += 1.0;
-        counts[static_cast<std::size_t>(kSigma + bin_of(s.variation, 0.0, 1.0 / 3.0,
-                                                         kSurfaceVariationBins))] += 1.0;
+        counts[static_cast<std::size_t>(
+            kBeta + bin_of(n.dot(view), -1.0, 1.0, kSurfaceViewpointBins))] += 1.0;
+        counts[static_cast<std::size_t>(
+            kSigma + bin_of(s.variation, 0.0, 1.0 / 3.0, kSurfaceVariationBins))] += 1.0;
         const Eigen::Vector3d d = s.position - centre;
         const double distance = d.norm();
         Eigen::Vector3d w1 = d.cross(u);
@@ -181,8 +183,8 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
     const std::array<int, kSurfaceAngleBlocks + 1> edges = {
         kAlpha, kPhi, kTheta, kDistance, kBeta, kSigma, kSurfaceAngleSize};
     for (std::size_t b = 0; b < kSurfaceAngleBlocks; ++b) {
-        const double total = b < 4 ? static_cast<double>(framed)
-                                   : static_cast<double>(surfels.size());
+        const double total =
+            b < 4 ? static_cast<double>(framed) : static_cast<double>(surfels.size());
         if (!(total > 0.0)) continue;  // every cell at the centre: leave the block empty
         for (int i = edges[b]; i < edges[b + 1]; ++i)
             out[static_cast<std::size_t>(i)] =

@@ -153,10 +153,13 @@ void validate(const TrainingOptions& options) {
         !(std::isfinite(*options.render.distance) && *options.render.distance > 0.0))
         throw std::invalid_argument("camera distance must be positive and finite");
     if (options.render.max_distance &&
-        !(options.render.distance && std::isfinite(*options.render.max_distance) &&
-          *options.render.max_distance >= *options.render.distance))
-        throw std::invalid_argument(
-            "largest camera distance must be finite and at least the camera distance");
+        !(std::isfinite(*options.render.max_distance) && *options.render.max_distance > 0.0))
+        throw std::invalid_argument("largest camera distance must be positive and finite");
+}
+
+/// Whether views draw their distance from a range (RenderOptions::max_distance).
+bool distance_range(const RenderOptions& r) {
+    return r.distance && r.max_distance && *r.max_distance > *r.distance;
 }
 
 /// A real setting, or "none" when unset.
@@ -494,7 +497,7 @@ Settings training_settings(const TrainingOptions& options, bool rescale_non_metr
         {"camera_cy", r.camera.cy},
         {"fill_fraction", r.fill_fraction},
         {"camera_distance", optional_value(r.distance)},
-        {"camera_max_distance", optional_value(r.max_distance)},
+        {"camera_max_distance", optional_value(distance_range(r) ? r.max_distance : std::nullopt)},
         {"camera_min_elevation", r.min_elevation},
         {"camera_max_elevation", r.max_elevation},
         {"model_scale", r.scale},

@@ -55,7 +55,8 @@ class CliEvalTest : public ::testing::Test {
             return;
         setup_error_ = "train";
         const CliRun train = esf("train " + quoted(dir() / "train") + " -o " + quoted(db()) +
-                                 " --level 0 --samples 2000 --threads 2");
+                                 " --descriptor esf --min-elevation -90 --level 0 --samples 2000 "
+                                 "--threads 2");
         if (train.code != 0) {
             setup_error_ += ": " + train.err;
             return;

@@ -22,7 +22,7 @@ namespace {
 struct TrainArgs {
     std::string root;
     std::string output;
-    std::string descriptor = "esf";
+    std::string descriptor = kTrainingDescriptor;
     int level = 1;
     int threads = 0;
     std::uint64_t seed = 0;
@@ -31,9 +31,9 @@ struct TrainArgs {
     std::string camera = "kinect";
     double fill = 0.5;
     double distance = kTrainingCameraDistance;
-    double max_distance = 0.0;
+    double max_distance = kTrainingMaxCameraDistance;
     double angles_weight = kEsfAnglesWeight;
-    double min_elevation = -90.0;
+    double min_elevation = kTrainingMinElevation;
     double max_elevation = 90.0;
     std::size_t min_points = 50;
     std::string catalog;
@@ -56,7 +56,10 @@ void run_train(const TrainArgs& args) {
         options.render.distance = args.distance;
     else
         options.render.distance.reset();
-    if (args.max_distance > 0.0) options.render.max_distance = args.max_distance;
+    if (args.max_distance > 0.0)
+        options.render.max_distance = args.max_distance;
+    else
+        options.render.max_distance.reset();
     options.render.min_elevation = args.min_elevation;
     options.render.max_elevation = args.max_elevation;
     options.descriptor = args.descriptor;
@@ -172,13 +175,15 @@ void add_train_command(CLI::App& app) {
         ->check(CLI::IsMember({"kinect", "pcl"}))
         ->capture_default_str();
     cmd->add_option("--distance", args->distance,
-                    "Camera distance from the model's centre, metres (a table-top sensor; models "
-                    "too large for it are seen from 1.5 x their radius); 0: use --fill instead")
+                    "Nearest camera distance from the model's centre, metres (a table-top sensor; "
+                    "models too large for it are seen from 1.5 x their radius); 0: use --fill "
+                    "instead")
         ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
     cmd->add_option("--max-distance", args->max_distance,
                     "Largest camera distance, metres: each view's distance is drawn from "
-                    "[--distance, --max-distance]; 0: every view at --distance")
+                    "[--distance, --max-distance]; at or below --distance (or 0): every view at "
+                    "--distance")
         ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
     cmd->add_option("--min-elevation", args->min_elevation,

@@ -33,9 +33,10 @@ struct RenderOptions {
     /// When set, the camera distance (metres, from the model's centre) instead of fill_fraction;
     /// must exceed the bounding sphere radius.
     std::optional<double> distance;
-    /// When set (with `distance`), each view's camera distance is drawn uniformly from
-    /// [distance, max_distance], seeded by (seed, view index): real table scenes are taken from
-    /// 0.6 to 1.2 m. Must be >= distance.
+    /// When set with `distance` and above it, each view's camera distance is drawn uniformly
+    /// from [distance, max_distance], seeded by (seed, view index): real table scenes are taken
+    /// from 0.6 to 1.2 m. Otherwise every view is seen from `distance` (or fill_fraction). Must
+    /// be positive and finite when set.
     std::optional<double> max_distance;
     /// Cameras kept from the view sphere: those whose elevation (degrees, the angle between the
     /// direction from the model's centre to the camera and the model's xy plane, positive

@@ -15,9 +15,9 @@
 //              s = |d| / max |d|, beta = n . v (the viewpoint angle), sigma (the variation)
 //
 // Output: six histograms, each over the cells with a normal and summing to 1: alpha, phi,
-// theta, s (15 bins each; VFH has 45, which measured no better), beta (16), sigma (8). Every cell counts once,
-// whatever its point count, so the histograms follow surface area rather than point density
-// (which falls with the square of the distance to the sensor).
+// theta, s (15 bins each; VFH has 45, which measured no better), beta (16), sigma (8). Every cell
+// counts once, whatever its point count, so the histograms follow surface area rather than point
+// density (which falls with the square of the distance to the sensor).
 //
 // Cost: one pass over the points and one over the cells (about 0.1-0.3 ms for 20,000 points).
 // Deterministic (no sampling) and re-entrant.
