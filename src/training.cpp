@@ -192,8 +192,16 @@ void check_settings(const Database& db, const Settings& wanted) {
     auto add = [&](const std::string& text) {
         differences += (differences.empty() ? "" : ", ") + text;
     };
+    // Settings added later: a database from before them was trained with these values.
+    const Settings legacy = {
+        {"camera_max_distance", std::string("none")},
+        {"camera_min_elevation", -90.0},
+        {"camera_max_elevation", 90.0},
+    };
     for (const auto& [key, value] : wanted) {
         const auto it = stored.find(key);
+        const auto old = legacy.find(key);
+        if (it == stored.end() && old != legacy.end() && old->second == value) continue;
         if (it == stored.end())
             add(key + " " + to_string(value) + " (database: unset)");
         else if (it->second != value)

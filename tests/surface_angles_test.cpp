@@ -104,7 +104,9 @@ TEST(SurfaceAngles, NonFinitePointsAreDropped) {
 }
 
 TEST(SurfaceAngles, Errors) {
-    EXPECT_EQ(error_of([] { compute_surface_angles(Points{{0, 0, 1}, {0, 0.1f, 1}}); }),
+    EXPECT_EQ(error_of([] {
+                  compute_surface_angles(Points{{0, 0, 1}, {0, 0.1f, 1}});
+              }),
               "surface angles: needs at least 3 finite points, got 2");
     Points line;
     for (int i = 0; i < 100; ++i) line.emplace_back(0.001f * static_cast<float>(i), 0.0f, 1.0f);

@@ -761,6 +761,26 @@ TEST_F(TrainingRunTest, CatalogRescalesNonMetricModelsAndSetsGroups) {
                     "rescale_non_metric none (database: category_extent)");
 }
 
+TEST_F(TrainingRunTest, DatabasesFromBeforeTheCameraSettingsResume) {
+    // A database written before the camera band and range existed has no such settings; it was
+    // trained from the whole sphere at one distance, so those options resume it.
+    const TrainingOptions o = fast_options();
+    Database db(path("db.sqlite"), OpenMode::kWrite);
+    train(root(), db, o);
+    Settings old = db.settings();
+    for (const char* key : {"camera_max_distance", "camera_min_elevation", "camera_max_elevation"})
+        ASSERT_EQ(old.erase(key), 1u) << key;
+    db.set_settings(old);
+    const TrainingResult again = train(root(), db, o);
+    EXPECT_EQ(again.models_existing, again.models_total);
+    // The new defaults are refused, naming what differs and what to do.
+    TrainingOptions upper = o;
+    upper.render.min_elevation = 0.0;
+    const std::string message = error_of<std::invalid_argument>([&] { train(root(), db, upper); });
+    EXPECT_CONTAINS(message, "camera_min_elevation 0 (database: unset)");
+    EXPECT_CONTAINS(message, "train with the same options to resume, or into a new database");
+}
+
 TEST_F(TrainingRunTest, KilledProcessResumesToTheSameDatabase) {
     Database full(path("full.sqlite"), OpenMode::kWrite);
     train(root(), full, fast_options());
