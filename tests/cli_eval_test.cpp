@@ -155,6 +155,19 @@ TEST_F(CliEvalTest, SyntheticLeaveOneModelOutAndGroups) {
     const nlohmann::json g = nlohmann::json::parse(grouped.out);
     EXPECT_EQ(g["test_set"], "leave-one-group-out");
     EXPECT_EQ(g["overall"]["top10"], 0.0);
+
+    // The database's own views as held-out queries: the same as leave-one-model-out.
+    const CliRun held =
+        esf("eval --synthetic --json -k 5 --queries " + quoted(db()) + " " + quoted(db()));
+    ASSERT_EQ(held.code, 0) << held.err;
+    const nlohmann::json h = nlohmann::json::parse(held.out);
+    EXPECT_EQ(h["overall"]["samples"], 6 * 20);
+    EXPECT_EQ(h["overall"]["top1"], j["overall"]["top1"]);
+    EXPECT_EQ(h["overall"]["top10"], j["overall"]["top10"]);
+    const CliRun wrong =
+        esf("eval --queries " + quoted(db()) + " " + quoted(db()) + " " + quoted(set()));
+    EXPECT_EQ(wrong.code, 1);
+    EXPECT_NE(wrong.err.find("--queries needs --synthetic"), std::string::npos) << wrong.err;
 }
 
 TEST_F(CliEvalTest, LearnWeightsStoresWeightsThatEvalUses) {

@@ -454,6 +454,15 @@ TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
         EXPECT_NEAR(line.distance, all[0].first, 1e-6);
     }
     EXPECT_EQ(report.test_set, "held-out views");
+    // A database's own views as held-out queries: leave-one-model-out exactly.
+    const EvaluationReport self = esf::evaluate_held_out(db, db, {}, options);
+    const EvaluationReport lomo = esf::evaluate_synthetic(db, options);
+    ASSERT_EQ(self.queries.size(), lomo.queries.size());
+    for (std::size_t q = 0; q < self.queries.size(); ++q) {
+        EXPECT_EQ(self.queries[q].predicted, lomo.queries[q].predicted) << q;
+        EXPECT_EQ(self.queries[q].rank, lomo.queries[q].rank) << q;
+        EXPECT_EQ(self.queries[q].distance, lomo.queries[q].distance) << q;
+    }
     EXPECT_EQ(error_of([&] { esf::evaluate_held_out(db, queries, {"g"}, options); }),
               "evaluate_held_out: 1 query groups for 12 models");
 }
