@@ -134,8 +134,10 @@ void add_train_command(CLI::App& app) {
         "train",
         "Build a training database from CAD models: ROOT/<category>/<model>.<ext>\n"
         "(ply obj off stl gltf glb dae 3ds fbx). Every model is rendered from the view sphere\n"
-        "(level 1: 80 views), every view is described with ESF (or --descriptor, a baseline:\n"
-        "the same views, seeds and noise for every descriptor), and views, poses, descriptors\n"
+        "(level 1: 80 cameras; by default the 44 above the model's xy plane, each 0.6 to 1.2 m\n"
+        "away), every view is described with ESF + surface angles (esf-angles; --descriptor esf\n"
+        "for the paper's ESF, or a baseline: the same views, seeds and noise for every\n"
+        "descriptor), and views, poses, descriptors\n"
         "and all settings go into one SQLite file, one transaction per model. Run it again to\n"
         "resume an interrupted run or to add new models; other settings are refused.\n"
         "With ROOT/catalog.csv (or --catalog), non-metric models are scaled to the median size\n"
@@ -161,7 +163,7 @@ void add_train_command(CLI::App& app) {
     cmd->add_option("--seed", args->seed, "Random seed (sensor noise, descriptor sampling)")
         ->capture_default_str();
     cmd->add_option("--samples", args->samples,
-                    "Point triples per view of esf, sdvs, d2 (paper: 20000)")
+                    "Point triples per view of esf, esf-angles, sdvs, d2 (paper: 20000)")
         ->capture_default_str();
     cmd->add_option("--angles-weight", args->angles_weight,
                     "esf-angles: weight of the surface angle histograms against ESF's 1")
