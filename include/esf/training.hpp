@@ -127,8 +127,9 @@ struct TrainingOptions {
     /// The descriptor stored: "esf" (our estimator with `esf`) or any other name of
     /// descriptor_names() (make_descriptor() with `descriptor_options`).
     std::string descriptor = kTrainingDescriptor;
-    EsfOptions esf;  ///< descriptor "esf"; esf.seed is ignored (see view_seed)
-    /// Any other descriptor; descriptor_options.seed is ignored (see view_seed).
+    EsfOptions esf;  ///< descriptor "esf" only; esf.seed is ignored (see view_seed)
+    /// Any other descriptor, the default esf-angles included (its ESF part takes
+    /// descriptor_options.samples); descriptor_options.seed is ignored (see view_seed).
     DescriptorOptions descriptor_options;
     std::uint64_t seed = 0;
     /// Views with fewer points (e.g. a thin object seen edge-on) are stored as skipped.
