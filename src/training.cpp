@@ -187,7 +187,8 @@ void check_settings(const Database& db, const Settings& wanted) {
                              " descriptors, not " + to_string(wanted_descriptor->second) +
                              " (setting descriptor " + to_string(wanted_descriptor->second) +
                              ", database: " + to_string(stored_descriptor->second) +
-                             "); train each descriptor into its own database"));
+                             "); train each descriptor into its own database, or descriptor " +
+                             to_string(stored_descriptor->second) + " to resume this one"));
     std::string differences;
     auto add = [&](const std::string& text) {
         differences += (differences.empty() ? "" : ", ") + text;
