@@ -1,6 +1,6 @@
-// Google Benchmark of the ESF descriptor: one cloud per iteration, single thread, and the batch
-// API on all cores. Real clouds come from $ESF_DATA (default ../shared/data) when present;
-// a generated partial cylinder is always measured.
+// Google Benchmark of the ESF descriptor (and the surface angles of esf-angles): one cloud per
+// iteration, single thread, and the batch API on all cores. Real clouds come from $ESF_DATA
+// (default ../shared/data) when present; a generated partial cylinder is always measured.
 
 #include <benchmark/benchmark.h>
 
@@ -12,6 +12,7 @@
 #include "bench_data.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/esf_descriptor.hpp"
+#include "esf/surface_angles.hpp"
 #include "esf_trace.hpp"
 
 namespace {
@@ -60,6 +61,29 @@ void BM_EsfFastRealMilk(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_EsfFastRealMilk)->Unit(benchmark::kMillisecond);
+
+void BM_SurfaceAnglesCylinder(benchmark::State& state) {
+    const esf::Points points = partial_cylinder(static_cast<std::size_t>(state.range(0)));
+    for (auto _ : state) benchmark::DoNotOptimize(esf::compute_surface_angles(points));
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_SurfaceAnglesCylinder)
+    ->Arg(2000)
+    ->Arg(15000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMillisecond);
+
+void BM_SurfaceAnglesRealMilk(benchmark::State& state) {
+    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
+    if (!std::filesystem::exists(file)) {
+        state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
+        return;
+    }
+    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    for (auto _ : state) benchmark::DoNotOptimize(esf::compute_surface_angles(points));
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_SurfaceAnglesRealMilk)->Unit(benchmark::kMillisecond);
 
 void BM_EsfBatchAllCores(benchmark::State& state) {
     std::vector<esf::Points> clouds(64, partial_cylinder(15000));

@@ -27,6 +27,9 @@ namespace esf {
 
 namespace {
 
+/// Camera distance of the demo's training and query views (metres).
+constexpr double kDemoCameraDistance = 0.8;
+
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
@@ -463,7 +466,12 @@ DemoResult run_demo(const DemoOptions& options) {
     t = Clock::now();
     report(DemoStage::kTrain, 0, model_count);
     TrainingOptions training;
+    // The demo's queries come from the whole view sphere at one distance (render_query_views),
+    // so it trains on the whole sphere at that distance.
     training.render.level = options.level;
+    training.render.distance = kDemoCameraDistance;
+    training.render.max_distance.reset();
+    training.render.min_elevation = -90.0;
     training.render.noise = SensorNoise::kKinect;
     training.seed = options.seed;
     training.threads = options.threads;

@@ -12,6 +12,7 @@
 
 #include "baseline_descriptors.hpp"
 #include "esf/esf_descriptor.hpp"
+#include "esf/surface_angles.hpp"
 
 namespace esf {
 
@@ -157,10 +158,52 @@ class D2Global final : public GlobalDescriptor {
     bool split_;
 };
 
-constexpr std::array<const char*, 9> kNames = {"esf",  "pcl-esf",  "sdvs", "d2",  "vfh",
-                                               "cvfh", "our-cvfh", "gasd", "shot"};
+/// ESF followed by the six surface angle histograms (surface_angles.hpp): the ESF part keeps
+/// its shape, the histograms are weighted kEsfAnglesWeight in all, then the whole signature is
+/// L1-normalised. The L1 distance of two signatures is so (L1_esf + L1_angles) / (1 + weight),
+/// the weight setting how far the surface angles count next to ESF.
+class EsfAnglesGlobal final : public GlobalDescriptor {
+  public:
+    explicit EsfAnglesGlobal(const DescriptorOptions& options)
+        : info_{"esf-angles", kEsfAnglesSize, false, true,
+                "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms (VFH's "
+                "angles, Rusu et al. 2010), seeded"},
+          pool_(fast_esf_options(options)),
+          weight_(options.angles_weight) {}
+    const DescriptorInfo& info() const override { return info_; }
+
+    std::vector<Signature> compute(std::span<const Eigen::Vector3f> points) const override {
+        const EsfResult esf = pool_.compute(points, info_.name);
+        SurfaceAngleHistograms angles;
+        try {
+            angles = compute_surface_angles(points);
+        } catch (const std::invalid_argument& e) {
+            throw std::invalid_argument(info_.name + ": " + e.what());
+        }
+        const double scale = 1.0 / (1.0 + weight_);
+        const double angle_scale = scale * weight_ / kSurfaceAngleBlocks;
+        Signature signature(static_cast<std::size_t>(kEsfAnglesSize));
+        for (std::size_t i = 0; i < esf.descriptor.size(); ++i)
+            signature[i] = static_cast<float>(esf.descriptor[i] * scale);
+        for (std::size_t i = 0; i < angles.size(); ++i)
+            signature[esf.descriptor.size() + i] = static_cast<float>(angles[i] * angle_scale);
+        return {std::move(signature)};
+    }
+
+  private:
+    DescriptorInfo info_;
+    EstimatorPool pool_;
+    double weight_;
+};
+
+constexpr std::array<const char*, 10> kNames = {"esf", "esf-angles", "pcl-esf",  "sdvs", "d2",
+                                                "vfh", "cvfh",       "our-cvfh", "gasd", "shot"};
 
 void validate(const DescriptorOptions& options) {
+    if (!(std::isfinite(options.angles_weight) && options.angles_weight >= 0.0))
+        throw std::invalid_argument(
+            "descriptor options: angles_weight must be finite and >= 0, got " +
+            std::to_string(options.angles_weight));
     if (options.samples < 1)
         throw std::invalid_argument("descriptor options: samples must be at least 1, got " +
                                     std::to_string(options.samples));
@@ -187,6 +230,7 @@ std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
     }
     validate(options);
     if (name == "esf") return std::make_unique<EsfGlobal>(options);
+    if (name == "esf-angles") return std::make_unique<EsfAnglesGlobal>(options);
     if (name == "sdvs") return std::make_unique<D2Global>(options, true);
     if (name == "d2") return std::make_unique<D2Global>(options, false);
     return detail::make_pcl_descriptor(name, options);

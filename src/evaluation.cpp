@@ -408,6 +408,7 @@ KnnIndex lomo_index(const DescriptorMatrix& matrix, const LomoSetup& setup,
     KnnIndexOptions options;
     options.weights = std::move(weights);
     options.threads = threads;
+    options.sketch_group = descriptor_sketch_group(matrix.kind.name);
     const auto dim = static_cast<std::size_t>(matrix.kind.dimension);
     return setup.multi_signature ? KnnIndex(matrix.data, dim, setup.row_views, options)
                                  : KnnIndex(matrix.data, dim, options);
@@ -497,6 +498,76 @@ EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
     double sum = 0.0;
     for (const double s : match_s) sum += s;
     report.match_ms = queries.empty() ? 0.0 : 1000.0 * sum / static_cast<double>(queries.size());
+    report.total_seconds = seconds_since(start);
+    return report;
+}
+
+EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const DescriptorMatrix& queries,
+                                   const std::vector<std::string>& query_groups,
+                                   const SyntheticOptions& options) {
+    const std::string what = "evaluate_held_out";
+    if (options.k == 0) throw std::invalid_argument(what + ": k must be >= 1");
+    if (matrix.kind.name != queries.kind.name || matrix.kind.dimension != queries.kind.dimension)
+        throw std::invalid_argument(what + ": queries hold " + queries.kind.name +
+                                    " descriptors, the database " + matrix.kind.name);
+    const int threads = resolve_threads(options.threads);
+    const auto start = std::chrono::steady_clock::now();
+    const detail::LomoSetup setup = detail::lomo_setup(matrix, options.groups, what);
+    if (setup.multi_signature || queries.rows() == 0)
+        throw std::invalid_argument(what + ": needs one signature per view and some queries");
+    const KnnIndex index = detail::lomo_index(matrix, setup, options.weights, threads);
+    // Group ids of the database's models by name, so a query's group is found by its name.
+    // Without groups a model is its own group, named "category/name" in both matrices.
+    const auto model_keys = [](const DescriptorMatrix& m) {
+        std::vector<std::string> keys;
+        for (const auto& model : m.models) keys.push_back(model.category + "/" + model.name);
+        return keys;
+    };
+    const std::vector<std::string> names =
+        options.groups.empty() ? model_keys(matrix) : options.groups;
+    std::map<std::string, std::uint32_t> group_id;
+    for (std::size_t r = 0; r < matrix.rows(); ++r)
+        group_id.emplace(names[matrix.row_info[r].model], setup.view_group[setup.row_views[r]]);
+    if (!query_groups.empty() && query_groups.size() != queries.models.size())
+        throw std::invalid_argument(what + ": " + std::to_string(query_groups.size()) +
+                                    " query groups for " + std::to_string(queries.models.size()) +
+                                    " models");
+    const std::vector<std::string> query_names =
+        query_groups.empty() ? model_keys(queries) : query_groups;
+    const std::vector<std::size_t> picked =
+        detail::lomo_queries(queries.rows(), options.max_queries);
+    std::vector<QueryOutcome> outcomes(picked.size());
+    std::vector<double> match_s(picked.size(), 0.0);
+    ProgressCounter progress(options.progress, picked.size());
+    parallel_for(picked.size(), threads, [&](std::size_t q) {
+        const DescriptorRow& row = queries.row_info[picked[q]];
+        QueryOutcome& o = outcomes[q];
+        o.file = queries.categories[row.category] + "/" + queries.models[row.model].name + "#" +
+                 std::to_string(row.view_index);
+        o.true_class = queries.categories[row.category];
+        const auto it = group_id.find(query_names[row.model]);
+        const std::size_t excluded = it == group_id.end() ? 0 : setup.group_views[it->second];
+        const auto t = std::chrono::steady_clock::now();
+        const KnnResult found =
+            index.search(queries.row(picked[q]), std::min(options.k + excluded, index.views()));
+        match_s[q] = seconds_since(t);
+        for (const KnnNeighbour& n : found.neighbours) {
+            if (it != group_id.end() && setup.view_group[n.view] == it->second) continue;
+            if (o.neighbours.size() == options.k) break;
+            o.neighbours.push_back({matrix.categories[setup.view_category[n.view]], n.distance});
+        }
+        if (o.neighbours.empty()) o.error = "no views outside its group";
+        progress.tick();
+    });
+    EvaluationReport report = evaluate(outcomes, options.k, matrix.categories);
+    report.mode = "synthetic";
+    report.test_set = "held-out views";
+    report.descriptor = matrix.kind.name;
+    report.weighted = !options.weights.empty();
+    report.threads = threads;
+    double sum = 0.0;
+    for (const double x : match_s) sum += x;
+    report.match_ms = picked.empty() ? 0.0 : 1000.0 * sum / static_cast<double>(picked.size());
     report.total_seconds = seconds_since(start);
     return report;
 }

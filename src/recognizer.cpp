@@ -1,6 +1,7 @@
 #include "esf/recognizer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -94,26 +95,51 @@ class Describer {
     virtual std::vector<float> describe(std::span<const Eigen::Vector3f> points) const = 0;
 };
 
-/// Our ESF with the database's options (estimators reused across calls, never shared).
+/// Seed of sampling s of a query: the database's seed for s = 0 (so one sampling describes a
+/// query as before), then seeds derived from it.
+std::uint64_t sampling_seed(std::uint64_t seed, int sampling) {
+    if (sampling == 0) return seed;
+    std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(sampling);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/// Our ESF with the database's options (estimators reused across calls, never shared); with
+/// several samplings, the mean of the descriptors of as many seeds.
 class EsfDescriber final : public Describer {
   public:
-    explicit EsfDescriber(const EsfOptions& options) : pool_(options) {}
+    EsfDescriber(const EsfOptions& options, int samplings) {
+        for (int s = 0; s < samplings; ++s) {
+            EsfOptions o = options;
+            o.seed = sampling_seed(options.seed, s);
+            pools_.push_back(std::make_unique<EsfEstimatorPool>(o));
+        }
+    }
 
     std::vector<float> describe(std::span<const Eigen::Vector3f> points) const override {
-        EsfResult result;
-        try {
-            result = pool_.compute(points);
-        } catch (const std::invalid_argument& e) {
-            // "ESF needs ..." -> "esf: needs ...", the form of the other descriptors' errors.
-            std::string what = e.what();
-            if (what.rfind("ESF ", 0) == 0) what.erase(0, 4);
-            throw std::invalid_argument("esf: " + what);
+        std::array<double, kEsfSize> sum{};
+        for (const auto& pool : pools_) {
+            EsfResult result;
+            try {
+                result = pool->compute(points);
+            } catch (const std::invalid_argument& e) {
+                // "ESF needs ..." -> "esf: needs ...", the form of the other descriptors' errors.
+                std::string what = e.what();
+                if (what.rfind("ESF ", 0) == 0) what.erase(0, 4);
+                throw std::invalid_argument("esf: " + what);
+            }
+            if (pools_.size() == 1) return {result.descriptor.begin(), result.descriptor.end()};
+            for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += result.descriptor[i];
         }
-        return {result.descriptor.begin(), result.descriptor.end()};
+        std::vector<float> out(sum.size());
+        const double scale = 1.0 / static_cast<double>(pools_.size());
+        for (std::size_t i = 0; i < sum.size(); ++i) out[i] = static_cast<float>(sum[i] * scale);
+        return out;
     }
 
   private:
-    EsfEstimatorPool pool_;
+    std::vector<std::unique_ptr<EsfEstimatorPool>> pools_;
 };
 
 /// Any descriptor of the registry (descriptor.hpp).
@@ -142,8 +168,8 @@ class RegistryDescriber final : public Describer {
     std::unique_ptr<GlobalDescriptor> descriptor_;
 };
 
-std::unique_ptr<Describer> make_describer(const QuerySetup& setup) {
-    if (setup.kind.name == "esf") return std::make_unique<EsfDescriber>(setup.esf);
+std::unique_ptr<Describer> make_describer(const QuerySetup& setup, int samplings) {
+    if (setup.kind.name == "esf") return std::make_unique<EsfDescriber>(setup.esf, samplings);
     return std::make_unique<RegistryDescriber>(setup.kind.name, setup.options);
 }
 
@@ -230,6 +256,7 @@ QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind) {
             throw std::invalid_argument("setting descriptor_remove_outliers = " +
                                         std::to_string(remove) + " is not 0 or 1");
         o.remove_outliers = remove == 1;
+        o.angles_weight = real_setting(settings, "descriptor_angles_weight", o.angles_weight);
         make_descriptor(kind.name, o);  // throws for options out of range
     }
     return setup;
@@ -248,6 +275,9 @@ struct Recognizer::Impl {
 Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options)
     : impl_(std::make_unique<Impl>()) {
     if (options.k == 0) throw std::invalid_argument("recognizer: k must be >= 1");
+    if (options.query_samplings < 1)
+        throw std::invalid_argument("recognizer: query samplings must be >= 1, got " +
+                                    std::to_string(options.query_samplings));
     resolve_threads(options.threads);
     impl_->options = options;
     auto fail = [&](const std::string& reason) {
@@ -277,7 +307,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     } catch (const std::invalid_argument& e) {
         fail(e.what());
     }
-    impl_->describer = make_describer(impl_->info.setup);
+    impl_->describer = make_describer(impl_->info.setup, options.query_samplings);
 
     DescriptorMatrix matrix = db.load_descriptors(kind.name);
     if (matrix.rows() == 0)
@@ -288,6 +318,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
 
     KnnIndexOptions index_options;
     index_options.threads = options.threads;
+    index_options.sketch_group = descriptor_sketch_group(kind.name);
     const bool block_weighted = kind.name == "esf" || kind.name == "pcl-esf";
     if (options.use_weights && block_weighted) {
         if (const auto weights = db.weights(kind.name)) {

@@ -332,8 +332,9 @@ void validate_noise(SensorNoise noise) {
 struct MeshRenderer::Impl {
     RenderOptions options;
     EmbreeScene embree;
-    std::vector<Eigen::Vector3d> directions;
-    Eigen::Vector3d centre;  // file units
+    std::vector<Eigen::Vector3d> directions;  // the whole view sphere
+    std::vector<int> kept;                    // view sphere indices of the cameras in use
+    Eigen::Vector3d centre;                   // file units
     double scale = 1.0;
     double radius = 0.0;  // metres
     double distance = 0.0;
@@ -383,6 +384,24 @@ MeshRenderer::MeshRenderer(const Mesh& mesh, const RenderOptions& options)
     options.camera.validate();
     validate_noise(options.noise);
     impl_->directions = view_sphere(options.level);
+    if (!(std::isfinite(options.min_elevation) && std::isfinite(options.max_elevation) &&
+          -90.0 <= options.min_elevation && options.min_elevation <= options.max_elevation &&
+          options.max_elevation <= 90.0))
+        throw std::invalid_argument(
+            "camera elevations must satisfy -90 <= min <= max <= 90 degrees, got [" +
+            std::to_string(options.min_elevation) + ", " + std::to_string(options.max_elevation) +
+            "]");
+    for (std::size_t i = 0; i < impl_->directions.size(); ++i) {
+        const double z = std::clamp(impl_->directions[i].z(), -1.0, 1.0);
+        const double elevation = std::asin(z) * 180.0 / std::numbers::pi;
+        if (elevation >= options.min_elevation && elevation <= options.max_elevation)
+            impl_->kept.push_back(static_cast<int>(i));
+    }
+    if (impl_->kept.empty())
+        throw std::invalid_argument("no camera of view sphere level " +
+                                    std::to_string(options.level) + " has an elevation in [" +
+                                    std::to_string(options.min_elevation) + ", " +
+                                    std::to_string(options.max_elevation) + "] degrees");
     if (!(std::isfinite(options.fill_fraction) && options.fill_fraction > 0.0))
         throw std::invalid_argument("fill fraction must be positive and finite, got " +
                                     std::to_string(options.fill_fraction));
@@ -406,6 +425,10 @@ MeshRenderer::MeshRenderer(const Mesh& mesh, const RenderOptions& options)
     impl_->radius = mesh.bounding_radius() * impl_->scale * (1.0 + 1e-5);
 
     const CameraIntrinsics& camera = options.camera;
+    if (options.max_distance &&
+        !(std::isfinite(*options.max_distance) && *options.max_distance > 0.0))
+        throw std::invalid_argument("largest camera distance must be positive and finite, got " +
+                                    std::to_string(*options.max_distance));
     if (options.distance) {
         if (!(std::isfinite(*options.distance) && *options.distance > impl_->radius))
             throw std::invalid_argument(
@@ -431,17 +454,29 @@ MeshRenderer::~MeshRenderer() = default;
 MeshRenderer::MeshRenderer(MeshRenderer&&) noexcept = default;
 MeshRenderer& MeshRenderer::operator=(MeshRenderer&&) noexcept = default;
 
-std::size_t MeshRenderer::view_count() const { return impl_->directions.size(); }
+std::size_t MeshRenderer::view_count() const { return impl_->kept.size(); }
+
+int MeshRenderer::view_index(std::size_t index) const {
+    if (index >= impl_->kept.size())
+        throw std::out_of_range("view index " + std::to_string(index) + " out of range (" +
+                                std::to_string(impl_->kept.size()) + " views)");
+    return impl_->kept[index];
+}
 
 RenderedView MeshRenderer::render_view(std::size_t index) const {
-    if (index >= impl_->directions.size())
-        throw std::out_of_range("view index " + std::to_string(index) + " out of range (" +
-                                std::to_string(impl_->directions.size()) + " views)");
+    const auto sphere_index = static_cast<std::size_t>(view_index(index));
+    double distance = impl_->distance;
+    if (impl_->options.distance && impl_->options.max_distance &&
+        *impl_->options.max_distance > impl_->distance) {
+        // A draw of its own: the pixels' noise uses keys below width * height.
+        PixelRandom random(impl_->options.seed, sphere_index, ~std::uint64_t{0});
+        distance += random.uniform() * (*impl_->options.max_distance - impl_->distance);
+    }
     const Eigen::Isometry3d scene_to_camera =
-        look_at(impl_->distance * impl_->directions[index], Eigen::Vector3d::Zero());
+        look_at(distance * impl_->directions[sphere_index], Eigen::Vector3d::Zero());
     RenderedView view;
-    view.index = static_cast<int>(index);
-    view.points = impl_->cast(scene_to_camera, index);
+    view.index = static_cast<int>(sphere_index);
+    view.points = impl_->cast(scene_to_camera, sphere_index);
     Eigen::Affine3d file_to_scene = Eigen::Affine3d::Identity();
     file_to_scene.linear() *= impl_->scale;
     file_to_scene.translation() = -impl_->scale * impl_->centre;

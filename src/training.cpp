@@ -147,10 +147,19 @@ void validate(const TrainingOptions& options) {
     tetrahedron.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
     RenderOptions render = options.render;
     render.distance.reset();  // depends on the model's size, checked per model
+    render.max_distance.reset();
     MeshRenderer probe(tetrahedron, render);
     if (options.render.distance &&
         !(std::isfinite(*options.render.distance) && *options.render.distance > 0.0))
         throw std::invalid_argument("camera distance must be positive and finite");
+    if (options.render.max_distance &&
+        !(std::isfinite(*options.render.max_distance) && *options.render.max_distance > 0.0))
+        throw std::invalid_argument("largest camera distance must be positive and finite");
+}
+
+/// Whether views draw their distance from a range (RenderOptions::max_distance).
+bool distance_range(const RenderOptions& r) {
+    return r.distance && r.max_distance && *r.max_distance > *r.distance;
 }
 
 /// A real setting, or "none" when unset.
@@ -178,13 +187,22 @@ void check_settings(const Database& db, const Settings& wanted) {
                              " descriptors, not " + to_string(wanted_descriptor->second) +
                              " (setting descriptor " + to_string(wanted_descriptor->second) +
                              ", database: " + to_string(stored_descriptor->second) +
-                             "); train each descriptor into its own database"));
+                             "); train each descriptor into its own database, or descriptor " +
+                             to_string(stored_descriptor->second) + " to resume this one"));
     std::string differences;
     auto add = [&](const std::string& text) {
         differences += (differences.empty() ? "" : ", ") + text;
     };
+    // Settings added later: a database from before them was trained with these values.
+    const Settings legacy = {
+        {"camera_max_distance", std::string("none")},
+        {"camera_min_elevation", -90.0},
+        {"camera_max_elevation", 90.0},
+    };
     for (const auto& [key, value] : wanted) {
         const auto it = stored.find(key);
+        const auto old = legacy.find(key);
+        if (it == stored.end() && old != legacy.end() && old->second == value) continue;
         if (it == stored.end())
             add(key + " " + to_string(value) + " (database: unset)");
         else if (it->second != value)
@@ -237,8 +255,11 @@ void prepare_job(Job& job, const TrainingOptions& options) {
             const double radius =
                 mesh.bounding_radius() *
                 (render.target_extent ? *render.target_extent / extent : render.scale);
-            if (*render.distance < kTrainingMinDistanceFactor * radius)
+            if (*render.distance < kTrainingMinDistanceFactor * radius) {
+                const double factor = kTrainingMinDistanceFactor * radius / *render.distance;
                 render.distance = kTrainingMinDistanceFactor * radius;
+                if (render.max_distance) *render.max_distance *= factor;
+            }
         }
         job.renderer = std::make_unique<MeshRenderer>(mesh, render);
         job.entry.scale = job.renderer->scale();
@@ -257,7 +278,7 @@ void prepare_job(Job& job, const TrainingOptions& options) {
 void describe_view(Job& job, std::size_t v, const TrainingOptions& options,
                    const GlobalDescriptor* baseline) {
     ViewEntry& view = job.entry.views[v];
-    view.index = static_cast<int>(v);
+    view.index = job.renderer->view_index(v);
     RenderedView rendered;
     try {
         rendered = job.renderer->render_view(v);
@@ -471,6 +492,8 @@ Settings training_settings(const TrainingOptions& options, bool rescale_non_metr
             {"descriptor_normal_radius_factor", static_cast<double>(d.normal_radius_factor)},
             {"descriptor_remove_outliers", std::int64_t{d.remove_outliers ? 1 : 0}},
         };
+        if (options.descriptor == "esf-angles")
+            settings.emplace("descriptor_angles_weight", d.angles_weight);
     }
     Settings common = {
         {"seed", seed_value(options.seed)},
@@ -483,6 +506,9 @@ Settings training_settings(const TrainingOptions& options, bool rescale_non_metr
         {"camera_cy", r.camera.cy},
         {"fill_fraction", r.fill_fraction},
         {"camera_distance", optional_value(r.distance)},
+        {"camera_max_distance", optional_value(distance_range(r) ? r.max_distance : std::nullopt)},
+        {"camera_min_elevation", r.min_elevation},
+        {"camera_max_elevation", r.max_elevation},
         {"model_scale", r.scale},
         {"target_extent", optional_value(r.target_extent)},
         {"noise", std::string(to_string(r.noise))},

@@ -56,7 +56,8 @@ class CliEvalTest : public ::testing::Test {
             return;
         setup_error_ = "train";
         const CliRun train = esf("train " + quoted(dir() / "train") + " -o " + quoted(db()) +
-                                 " --level 0 --samples 2000 --threads 2");
+                                 " --descriptor esf --min-elevation -90 --level 0 --samples 2000 "
+                                 "--threads 2");
         if (train.code != 0) {
             setup_error_ += ": " + train.err;
             return;
@@ -155,6 +156,19 @@ TEST_F(CliEvalTest, SyntheticLeaveOneModelOutAndGroups) {
     const nlohmann::json g = nlohmann::json::parse(grouped.out);
     EXPECT_EQ(g["test_set"], "leave-one-group-out");
     EXPECT_EQ(g["overall"]["top10"], 0.0);
+
+    // The database's own views as held-out queries: the same as leave-one-model-out.
+    const CliRun held =
+        esf("eval --synthetic --json -k 5 --queries " + quoted(db()) + " " + quoted(db()));
+    ASSERT_EQ(held.code, 0) << held.err;
+    const nlohmann::json h = nlohmann::json::parse(held.out);
+    EXPECT_EQ(h["overall"]["samples"], 6 * 20);
+    EXPECT_EQ(h["overall"]["top1"], j["overall"]["top1"]);
+    EXPECT_EQ(h["overall"]["top10"], j["overall"]["top10"]);
+    const CliRun wrong =
+        esf("eval --queries " + quoted(db()) + " " + quoted(db()) + " " + quoted(set()));
+    EXPECT_EQ(wrong.code, 1);
+    EXPECT_NE(wrong.err.find("--queries needs --synthetic"), std::string::npos) << wrong.err;
 }
 
 TEST_F(CliEvalTest, LearnWeightsStoresWeightsThatEvalUses) {

@@ -23,6 +23,7 @@
 #include "esf/esf_descriptor.hpp"
 #include "esf/mesh.hpp"
 #include "esf/render.hpp"
+#include "esf/surface_angles.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -33,8 +34,8 @@ using testing::HasSubstr;
 using testing::StartsWith;
 
 const std::map<std::string, int> kDimensions = {
-    {"esf", 640},  {"pcl-esf", 640},  {"sdvs", 192}, {"d2", 64},    {"vfh", 308},
-    {"cvfh", 308}, {"our-cvfh", 308}, {"gasd", 512}, {"shot", 352},
+    {"esf", 640}, {"esf-angles", 724}, {"pcl-esf", 640},  {"sdvs", 192}, {"d2", 64},
+    {"vfh", 308}, {"cvfh", 308},       {"our-cvfh", 308}, {"gasd", 512}, {"shot", 352},
 };
 
 /// Front half of a can (radius 4 cm, height 12 cm) 0.8 m in front of the sensor, as a depth
@@ -143,8 +144,9 @@ Points mug() {
 }
 
 TEST(DescriptorRegistry, NamesAndInfo) {
-    EXPECT_THAT(esf::descriptor_names(), testing::ElementsAre("esf", "pcl-esf", "sdvs", "d2", "vfh",
-                                                              "cvfh", "our-cvfh", "gasd", "shot"));
+    EXPECT_THAT(esf::descriptor_names(),
+                testing::ElementsAre("esf", "esf-angles", "pcl-esf", "sdvs", "d2", "vfh", "cvfh",
+                                     "our-cvfh", "gasd", "shot"));
     for (const auto& name : esf::descriptor_names()) {
         const auto descriptor = esf::make_descriptor(name);
         const auto& info = descriptor->info();
@@ -287,6 +289,29 @@ TEST(EsfDescriptor, IsComputeEsfWithTheSeed) {
     const auto expected = esf::compute_esf(points, esf_options).descriptor;
     ASSERT_EQ(signatures.size(), 1u);
     EXPECT_EQ(signatures[0], Signature(expected.begin(), expected.end()));
+}
+
+TEST(EsfAnglesDescriptor, IsEsfThenTheWeightedSurfaceAngles) {
+    esf::DescriptorOptions options;
+    options.seed = 42;
+    options.samples = 5000;
+    options.angles_weight = 0.5;
+    const Points points = partial_cylinder();
+    const auto signatures = esf::make_descriptor("esf-angles", options)->compute(points);
+    ASSERT_EQ(signatures.size(), 1u);
+    ASSERT_EQ(signatures[0].size(), static_cast<std::size_t>(esf::kEsfAnglesSize));
+    esf::EsfOptions esf_options;
+    esf_options.seed = 42;
+    esf_options.samples = 5000;
+    const auto esf = esf::compute_esf(points, esf_options).descriptor;
+    const auto angles = esf::compute_surface_angles(points);
+    // ESF scaled by 1 / 1.5, each of the six angle histograms by 0.5 / 6 / 1.5.
+    for (std::size_t i = 0; i < esf.size(); ++i)
+        EXPECT_FLOAT_EQ(signatures[0][i], esf[i] / 1.5f) << i;
+    for (std::size_t i = 0; i < angles.size(); ++i)
+        EXPECT_NEAR(signatures[0][esf.size() + i], angles[i] * 0.5f / 6.0f / 1.5f, 1e-7f) << i;
+    options.angles_weight = -1.0;
+    EXPECT_THROW(esf::make_descriptor("esf-angles", options), std::invalid_argument);
 }
 
 TEST(EsfDescriptor, SeedChangesTheSampleNotTheShape) {

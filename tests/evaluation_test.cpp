@@ -418,6 +418,55 @@ TEST(EvaluateSynthetic, RejectsBadInput) {
     EXPECT_THROW(esf::evaluate_synthetic(esf::DescriptorMatrix{}), std::invalid_argument);
 }
 
+TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
+    // The same models (c<i>/m<j>), other views: each query's own model is left out.
+    const esf::DescriptorMatrix db = random_matrix(3, 4, 5, 24, 1, 7);
+    const esf::DescriptorMatrix queries = random_matrix(3, 4, 2, 24, 1, 23);
+    esf::SyntheticOptions options;
+    options.k = 4;
+    options.threads = 2;
+    const EvaluationReport report = esf::evaluate_held_out(db, queries, {}, options);
+    ASSERT_EQ(report.queries.size(), queries.rows());
+    const std::size_t dim = 24;
+    for (std::size_t q = 0; q < queries.rows(); ++q) {
+        const esf::DescriptorRow& qr = queries.row_info[q];
+        std::vector<std::pair<double, std::size_t>> all;
+        for (std::size_t r = 0; r < db.rows(); ++r) {
+            const esf::DescriptorRow& dr = db.row_info[r];
+            if (dr.category == qr.category &&
+                db.models[dr.model].name == queries.models[qr.model].name)
+                continue;
+            double d = 0.0;
+            for (std::size_t i = 0; i < dim; ++i)
+                d += std::abs(static_cast<double>(queries.data[q * dim + i]) -
+                              static_cast<double>(db.data[r * dim + i]));
+            all.emplace_back(d, r);
+        }
+        std::sort(all.begin(), all.end());
+        const std::string truth = queries.categories[qr.category];
+        const esf::QueryResult& line = report.queries[q];
+        EXPECT_EQ(line.true_class, truth);
+        EXPECT_EQ(line.predicted, db.categories[db.row_info[all[0].second].category]) << q;
+        std::size_t rank = 0;
+        for (std::size_t j = 0; j < options.k && !rank; ++j)
+            if (db.categories[db.row_info[all[j].second].category] == truth) rank = j + 1;
+        EXPECT_EQ(line.rank, rank) << "query " << q;
+        EXPECT_NEAR(line.distance, all[0].first, 1e-6);
+    }
+    EXPECT_EQ(report.test_set, "held-out views");
+    // A database's own views as held-out queries: leave-one-model-out exactly.
+    const EvaluationReport self = esf::evaluate_held_out(db, db, {}, options);
+    const EvaluationReport lomo = esf::evaluate_synthetic(db, options);
+    ASSERT_EQ(self.queries.size(), lomo.queries.size());
+    for (std::size_t q = 0; q < self.queries.size(); ++q) {
+        EXPECT_EQ(self.queries[q].predicted, lomo.queries[q].predicted) << q;
+        EXPECT_EQ(self.queries[q].rank, lomo.queries[q].rank) << q;
+        EXPECT_EQ(self.queries[q].distance, lomo.queries[q].distance) << q;
+    }
+    EXPECT_EQ(error_of([&] { esf::evaluate_held_out(db, queries, {"g"}, options); }),
+              "evaluate_held_out: 1 query groups for 12 models");
+}
+
 // ---- test sets against a database -----------------------------------------------------------
 
 class EvaluateTestSet : public ::testing::Test {

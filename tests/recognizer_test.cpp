@@ -72,7 +72,11 @@ class RecognizerTest : public ::testing::Test {
         }
         db_path_ = (root_ / "two.sqlite").string();
         esf::Database db(db_path_, esf::OpenMode::kWrite);
-        esf::TrainingOptions options;
+        esf::TrainingOptions options;  // the paper's ESF from the whole view sphere at 0.8 m
+        options.descriptor = "esf";
+        options.render.min_elevation = -90.0;
+        options.render.distance = 0.8;
+        options.render.max_distance.reset();
         options.render.level = 1;
         options.esf.samples = kSamples;
         options.seed = 5;

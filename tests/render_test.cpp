@@ -587,3 +587,72 @@ TEST(RenderRealData, KitAndYcbMeshesGiveEveryView) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(MeshRenderer, ElevationBandKeepsTheCamerasAboveTheModel) {
+    const esf::Mesh box = make_box(0.1, 0.08, 0.2);
+    esf::RenderOptions options;
+    options.distance = 0.8;
+    options.min_elevation = 0.0;
+    const esf::MeshRenderer renderer(box, options);
+    const auto sphere = esf::view_sphere(options.level);
+    std::size_t upper = 0;
+    for (const auto& d : sphere) upper += d.z() >= 0.0;
+    ASSERT_EQ(renderer.view_count(), upper);
+    EXPECT_LT(upper, sphere.size());
+    int previous = -1;
+    for (std::size_t i = 0; i < renderer.view_count(); ++i) {
+        const int index = renderer.view_index(i);
+        EXPECT_GT(index, previous);  // view sphere order
+        previous = index;
+        EXPECT_GE(sphere[static_cast<std::size_t>(index)].z(), 0.0) << index;
+    }
+    const esf::RenderedView view = renderer.render_view(3);
+    EXPECT_EQ(view.index, renderer.view_index(3));
+    EXPECT_EQ(error_of([&] { renderer.view_index(upper); }), "view index " + std::to_string(upper) +
+                                                                 " out of range (" +
+                                                                 std::to_string(upper) + " views)");
+
+    options.min_elevation = 30.0;
+    options.max_elevation = 10.0;
+    EXPECT_EQ(error_of([&] { esf::MeshRenderer(box, options); }),
+              "camera elevations must satisfy -90 <= min <= max <= 90 degrees, got [30.000000, "
+              "10.000000]");
+    options.min_elevation = options.max_elevation = 90.0;
+    EXPECT_EQ(error_of([&] { esf::MeshRenderer(box, options); }),
+              "no camera of view sphere level 1 has an elevation in [90.000000, 90.000000] "
+              "degrees");
+}
+
+TEST(MeshRenderer, CameraDistancesAreDrawnFromTheRange) {
+    const esf::Mesh box = make_box(0.1, 0.08, 0.2);
+    esf::RenderOptions options;
+    options.distance = 0.6;
+    options.max_distance = 1.2;
+    options.seed = 5;
+    const esf::MeshRenderer renderer(box, options);
+    double lo = 10.0, hi = 0.0;
+    for (std::size_t i = 0; i < renderer.view_count(); ++i) {
+        const esf::RenderedView view = renderer.render_view(i);
+        // The model's centre (the origin of the box) lies this far from the camera.
+        const double d = view.pose.col(3).head<3>().cast<double>().norm();
+        EXPECT_GE(d, 0.6 - 1e-5);
+        EXPECT_LE(d, 1.2 + 1e-5);
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+        EXPECT_EQ(renderer.render_view(i).points, view.points);  // the same draw every time
+    }
+    EXPECT_LT(lo, 0.75);
+    EXPECT_GT(hi, 1.05);
+    // At or below the distance, every view is seen from the distance.
+    options.max_distance = 0.5;
+    const esf::MeshRenderer fixed(box, options);
+    const Eigen::Matrix4f pose = fixed.render_view(0).pose;
+    EXPECT_NEAR(pose.col(3).head<3>().cast<double>().norm(), 0.6, 1e-5);
+    options.max_distance = -1.0;
+    EXPECT_EQ(error_of([&] { esf::MeshRenderer(box, options); }),
+              "largest camera distance must be positive and finite, got -1.000000");
+}
+
+}  // namespace

@@ -90,9 +90,12 @@ Mesh sphere_mesh(float radius, int rings = 12, int segments = 24) {
     return m;
 }
 
-/// Small, fast settings: 20 views, a 160x120 camera, 2000 ESF samples.
+/// Small, fast settings: the paper's ESF, 20 views (the whole view sphere), a 160x120 camera,
+/// 2000 ESF samples.
 TrainingOptions fast_options() {
     TrainingOptions o;
+    o.descriptor = "esf";
+    o.render.min_elevation = -90.0;
     o.render.level = 0;
     o.render.camera.width = 160;
     o.render.camera.height = 120;
@@ -100,6 +103,7 @@ TrainingOptions fast_options() {
     o.render.camera.cx = 79.5;
     o.render.camera.cy = 59.5;
     o.render.distance.reset();  // the small camera sees the small test shapes at fill 0.5
+    o.render.max_distance.reset();
     o.esf.samples = 2000;
     o.seed = 7;
     o.threads = 2;
@@ -266,8 +270,29 @@ TEST(TrainingSeeds, DependOnNameAndIndexOnly) {
     EXPECT_NE(view_seed(s, 0), s);
 }
 
+TEST(TrainingSettings, DefaultsAreEsfAnglesFromAboveAtTableTopDistances) {
+    const TrainingOptions o;
+    EXPECT_EQ(o.descriptor, "esf-angles");
+    const Settings s = training_settings(o, false);
+    EXPECT_EQ(s.at("descriptor"), SettingValue(std::string("esf-angles")));
+    EXPECT_EQ(s.at("descriptor_version"),
+              SettingValue(std::int64_t{kEsfVersion * 100 + kSurfaceAnglesVersion}));
+    EXPECT_EQ(s.at("descriptor_dimension"), SettingValue(std::int64_t{kEsfAnglesSize}));
+    EXPECT_EQ(s.at("descriptor_angles_weight"), SettingValue(kEsfAnglesWeight));
+    EXPECT_EQ(s.at("camera_distance"), SettingValue(0.6));
+    EXPECT_EQ(s.at("camera_max_distance"), SettingValue(1.2));
+    EXPECT_EQ(s.at("camera_min_elevation"), SettingValue(0.0));
+    EXPECT_EQ(s.at("camera_max_elevation"), SettingValue(90.0));
+    // A largest distance at or below the distance draws nothing: stored as none.
+    TrainingOptions fixed;
+    fixed.render.max_distance = 0.6;
+    EXPECT_EQ(training_settings(fixed, false).at("camera_max_distance"),
+              SettingValue(std::string("none")));
+}
+
 TEST(TrainingSettings, RecordEverythingThatChangesTheData) {
     TrainingOptions o;
+    o.descriptor = "esf";
     o.seed = 42;
     o.esf.samples = 1234;
     const Settings s = training_settings(o, true);
@@ -319,7 +344,7 @@ TEST(TrainingSettings, BaselinesStoreWhatQueriesAreDescribedWith) {
     const std::string message =
         error_of<std::invalid_argument>([&] { training_settings(o, false); });
     EXPECT_CONTAINS(message, "unknown descriptor 'fpfh'");
-    EXPECT_CONTAINS(message, "esf, pcl-esf, sdvs, d2, vfh, cvfh, our-cvfh, gasd, shot");
+    EXPECT_CONTAINS(message, "esf, esf-angles, pcl-esf, sdvs, d2, vfh, cvfh, our-cvfh, gasd, shot");
 }
 
 TEST_F(TrainingTest, BadOptionsAndEmptyRootsAreRejected) {
@@ -338,7 +363,7 @@ TEST_F(TrainingTest, BadOptionsAndEmptyRootsAreRejected) {
     o = fast_options();
     o.descriptor = "fpfh";
     EXPECT_CONTAINS(error_of<std::invalid_argument>([&] { train(path("empty"), db, o); }),
-                    "unknown descriptor 'fpfh' (valid: esf, pcl-esf, sdvs, d2, vfh");
+                    "unknown descriptor 'fpfh' (valid: esf, esf-angles, pcl-esf, sdvs, d2, vfh");
     o = fast_options();
     o.descriptor = "vfh";
     o.descriptor_options.normal_radius_factor = 0.0f;
@@ -734,6 +759,26 @@ TEST_F(TrainingRunTest, CatalogRescalesNonMetricModelsAndSetsGroups) {
     o.use_catalog = false;
     EXPECT_CONTAINS(error_of<std::invalid_argument>([&] { train(root(), db, o); }),
                     "rescale_non_metric none (database: category_extent)");
+}
+
+TEST_F(TrainingRunTest, DatabasesFromBeforeTheCameraSettingsResume) {
+    // A database written before the camera band and range existed has no such settings; it was
+    // trained from the whole sphere at one distance, so those options resume it.
+    const TrainingOptions o = fast_options();
+    Database db(path("db.sqlite"), OpenMode::kWrite);
+    train(root(), db, o);
+    Settings old = db.settings();
+    for (const char* key : {"camera_max_distance", "camera_min_elevation", "camera_max_elevation"})
+        ASSERT_EQ(old.erase(key), 1u) << key;
+    db.set_settings(old);
+    const TrainingResult again = train(root(), db, o);
+    EXPECT_EQ(again.models_existing, again.models_total);
+    // The new defaults are refused, naming what differs and what to do.
+    TrainingOptions upper = o;
+    upper.render.min_elevation = 0.0;
+    const std::string message = error_of<std::invalid_argument>([&] { train(root(), db, upper); });
+    EXPECT_CONTAINS(message, "camera_min_elevation 0 (database: unset)");
+    EXPECT_CONTAINS(message, "train with the same options to resume, or into a new database");
 }
 
 TEST_F(TrainingRunTest, KilledProcessResumesToTheSameDatabase) {

@@ -30,6 +30,10 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
                    "Descriptor kind to use when the database holds several");
     cmd.add_flag("--no-weights", args.no_weights,
                  "Ignore the database's learned sub-histogram weights (plain L1)");
+    cmd.add_option("--samplings", args.options.query_samplings,
+                   "ESF: describe each query this many times (other seeds) and average")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
     cmd.add_option("--threads", args.options.threads, "Worker threads, 0 = all cores")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();

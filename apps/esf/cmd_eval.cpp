@@ -29,6 +29,8 @@ struct EvalArgs {
     std::size_t k = 10;
     std::string descriptor;
     bool no_weights = false;
+    int samplings = 1;
+    std::string queries;
     int threads = 0;
     bool synthetic = false;
     std::string groups;
@@ -66,6 +68,7 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.k = args.k;
     options.descriptor = args.descriptor;
     options.use_weights = !args.no_weights;
+    options.query_samplings = args.samplings;
     options.threads = args.threads;
     return options;
 }
@@ -188,6 +191,8 @@ void run_eval(const EvalArgs& args) {
         throw CLI::ValidationError("eval", "--synthetic takes no TESTSET.csv");
     if (!args.synthetic && !args.groups.empty())
         throw CLI::ValidationError("--groups", "--groups needs --synthetic");
+    if (!args.synthetic && !args.queries.empty())
+        throw CLI::ValidationError("--queries", "--queries needs --synthetic");
     if (!args.synthetic && args.max_queries)
         throw CLI::ValidationError("--max-queries", "--max-queries needs --synthetic");
 
@@ -201,12 +206,25 @@ void run_eval(const EvalArgs& args) {
         options.max_queries = args.max_queries;
         options.groups = cli_model_groups(matrix, args.groups);
         if (!args.no_weights) options.weights = stored_dimension_weights(db, matrix);
-        const std::size_t views = view_count(matrix);
-        Progress progress("eval",
-                          options.max_queries ? std::min(views, options.max_queries) : views);
-        options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
-        report = evaluate_synthetic(matrix, options);
-        progress.finish();
+        if (!args.queries.empty()) {
+            const Database query_db(args.queries, OpenMode::kRead);
+            const DescriptorMatrix queries = query_db.load_descriptors(matrix.kind.name);
+            const std::vector<std::string> query_groups = cli_model_groups(queries, args.groups);
+            Progress progress("eval", options.max_queries
+                                          ? std::min(queries.rows(), options.max_queries)
+                                          : queries.rows());
+            options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
+            report = evaluate_held_out(matrix, queries, query_groups, options);
+            progress.finish();
+            report.test_set = args.queries;
+        } else {
+            const std::size_t views = view_count(matrix);
+            Progress progress("eval",
+                              options.max_queries ? std::min(views, options.max_queries) : views);
+            options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
+            report = evaluate_synthetic(matrix, options);
+            progress.finish();
+        }
         report.database = args.database;
     } else {
         const TestSet set = read_test_set(args.test_set);
@@ -295,6 +313,10 @@ void add_eval_command(CLI::App& app) {
                     "Descriptor kind to evaluate when the database holds several");
     cmd->add_flag("--no-weights", args->no_weights,
                   "Ignore the database's learned sub-histogram weights (plain L1)");
+    cmd->add_option("--samplings", args->samplings,
+                    "ESF: describe each query this many times (other seeds) and average")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
@@ -303,6 +325,10 @@ void add_eval_command(CLI::App& app) {
     cmd->add_option("--groups", args->groups,
                     "With --synthetic: catalog CSV (file, group columns); all views of a query's "
                     "group are left out")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--queries", args->queries,
+                    "With --synthetic: take the views of this database as queries (held out: "
+                    "the views of their group are left out of DB)")
         ->check(CLI::ExistingFile);
     cmd->add_option("--max-queries", args->max_queries,
                     "With --synthetic: query at most N evenly spaced views (0 = all)")

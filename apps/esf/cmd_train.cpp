@@ -22,7 +22,7 @@ namespace {
 struct TrainArgs {
     std::string root;
     std::string output;
-    std::string descriptor = "esf";
+    std::string descriptor = kTrainingDescriptor;
     int level = 1;
     int threads = 0;
     std::uint64_t seed = 0;
@@ -31,6 +31,10 @@ struct TrainArgs {
     std::string camera = "kinect";
     double fill = 0.5;
     double distance = kTrainingCameraDistance;
+    double max_distance = kTrainingMaxCameraDistance;
+    double angles_weight = kEsfAnglesWeight;
+    double min_elevation = kTrainingMinElevation;
+    double max_elevation = 90.0;
     std::size_t min_points = 50;
     std::string catalog;
     bool no_catalog = false;
@@ -52,9 +56,16 @@ void run_train(const TrainArgs& args) {
         options.render.distance = args.distance;
     else
         options.render.distance.reset();
+    if (args.max_distance > 0.0)
+        options.render.max_distance = args.max_distance;
+    else
+        options.render.max_distance.reset();
+    options.render.min_elevation = args.min_elevation;
+    options.render.max_elevation = args.max_elevation;
     options.descriptor = args.descriptor;
     options.esf.samples = args.samples;
     options.descriptor_options.samples = args.samples;
+    options.descriptor_options.angles_weight = args.angles_weight;
     options.seed = args.seed;
     options.min_points = args.min_points;
     options.threads = args.threads;
@@ -123,8 +134,10 @@ void add_train_command(CLI::App& app) {
         "train",
         "Build a training database from CAD models: ROOT/<category>/<model>.<ext>\n"
         "(ply obj off stl gltf glb dae 3ds fbx). Every model is rendered from the view sphere\n"
-        "(level 1: 80 views), every view is described with ESF (or --descriptor, a baseline:\n"
-        "the same views, seeds and noise for every descriptor), and views, poses, descriptors\n"
+        "(level 1: 80 cameras; by default the 44 above the model's xy plane, each 0.6 to 1.2 m\n"
+        "away), every view is described with ESF + surface angles (esf-angles; --descriptor esf\n"
+        "for the paper's ESF, or a baseline: the same views, seeds and noise for every\n"
+        "descriptor), and views, poses, descriptors\n"
         "and all settings go into one SQLite file, one transaction per model. Run it again to\n"
         "resume an interrupted run or to add new models; other settings are refused.\n"
         "With ROOT/catalog.csv (or --catalog), non-metric models are scaled to the median size\n"
@@ -150,7 +163,11 @@ void add_train_command(CLI::App& app) {
     cmd->add_option("--seed", args->seed, "Random seed (sensor noise, descriptor sampling)")
         ->capture_default_str();
     cmd->add_option("--samples", args->samples,
-                    "Point triples per view of esf, sdvs, d2 (paper: 20000)")
+                    "Point triples per view of esf, esf-angles, sdvs, d2 (paper: 20000)")
+        ->capture_default_str();
+    cmd->add_option("--angles-weight", args->angles_weight,
+                    "esf-angles: weight of the surface angle histograms against ESF's 1")
+        ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
     cmd->add_option("--noise", args->noise, "Sensor noise model: kinect or none")
         ->check(CLI::IsMember({"kinect", "none"}))
@@ -160,9 +177,24 @@ void add_train_command(CLI::App& app) {
         ->check(CLI::IsMember({"kinect", "pcl"}))
         ->capture_default_str();
     cmd->add_option("--distance", args->distance,
-                    "Camera distance from the model's centre, metres (a table-top sensor; models "
-                    "too large for it are seen from 1.5 x their radius); 0: use --fill instead")
+                    "Nearest camera distance from the model's centre, metres (a table-top sensor; "
+                    "models too large for it are seen from 1.5 x their radius); 0: use --fill "
+                    "instead")
         ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
+    cmd->add_option("--max-distance", args->max_distance,
+                    "Largest camera distance, metres: each view's distance is drawn from "
+                    "[--distance, --max-distance]; at or below --distance (or 0): every view at "
+                    "--distance")
+        ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
+    cmd->add_option("--min-elevation", args->min_elevation,
+                    "Lowest camera elevation above the model's xy plane, degrees")
+        ->check(CLI::Range(-90.0, 90.0))
+        ->capture_default_str();
+    cmd->add_option("--max-elevation", args->max_elevation,
+                    "Highest camera elevation above the model's xy plane, degrees")
+        ->check(CLI::Range(-90.0, 90.0))
         ->capture_default_str();
     cmd->add_option("--fill", args->fill,
                     "With --distance 0: fraction of the image side the object spans (PCL's "

@@ -240,4 +240,18 @@ std::vector<std::string> stored_model_groups(const DescriptorMatrix& matrix);
 EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
                                     const SyntheticOptions& options = {});
 
+/// Held-out synthetic queries: every view of `queries` (another database's views of the same
+/// models, e.g. rendered with another seed, other cameras and distances) is searched among the
+/// views of `matrix` whose model belongs to another group than the query's model, by the exact
+/// (weighted) L1 distance; the true class is the query's category. So databases trained with
+/// different cameras are compared on the same queries. `groups` names the group of each model
+/// of `matrix`, `query_groups` of each model of `queries` (models order; when empty, each model
+/// is its own group, matched by "category/name": leave-one-model-out). Both matrices must hold one
+/// signature per view of the same descriptor and dimension. Throws std::invalid_argument for k = 0,
+/// bad weights, group vectors of the wrong size, multi-signature or empty matrices, or matrices of
+/// other kinds.
+EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const DescriptorMatrix& queries,
+                                   const std::vector<std::string>& query_groups,
+                                   const SyntheticOptions& options = {});
+
 }  // namespace esf

@@ -33,6 +33,18 @@ struct RenderOptions {
     /// When set, the camera distance (metres, from the model's centre) instead of fill_fraction;
     /// must exceed the bounding sphere radius.
     std::optional<double> distance;
+    /// When set with `distance` and above it, each view's camera distance is drawn uniformly
+    /// from [distance, max_distance], seeded by (seed, view index): real table scenes are taken
+    /// from 0.6 to 1.2 m. Otherwise every view is seen from `distance` (or fill_fraction). Must
+    /// be positive and finite when set.
+    std::optional<double> max_distance;
+    /// Cameras kept from the view sphere: those whose elevation (degrees, the angle between the
+    /// direction from the model's centre to the camera and the model's xy plane, positive
+    /// towards +z) lies in [min_elevation, max_elevation]. The default keeps the whole sphere;
+    /// [15, 75] keeps the cameras that see an upright model standing on a table from where a
+    /// robot or a person looks at it.
+    double min_elevation = -90.0;
+    double max_elevation = 90.0;
     SensorNoise noise = SensorNoise::kKinect;  ///< see sensor_model.hpp
     std::uint64_t seed = 0;                    ///< noise seed; view i draws from (seed, i)
     /// Uniform factor applied to the file coordinates before rendering, so that they are metres
@@ -66,10 +78,14 @@ class MeshRenderer {
     MeshRenderer(MeshRenderer&&) noexcept;
     MeshRenderer& operator=(MeshRenderer&&) noexcept;
 
-    std::size_t view_count() const;
-    /// Renders view `index`: the camera sits at centre + camera_distance() * view_sphere(level)
-    /// [index] (in scaled model coordinates) and looks at the centre, image up = model +z
-    /// (see look_at). Throws std::out_of_range past view_count().
+    std::size_t view_count() const;  ///< cameras kept (see RenderOptions::min_elevation)
+    /// View sphere index of kept camera `index`. Throws std::out_of_range past view_count().
+    int view_index(std::size_t index) const;
+    /// Renders view `index` (0 .. view_count() - 1, the kept cameras in view sphere order): the
+    /// camera sits at centre + distance * view_sphere(level)[view_index(index)] (in scaled model
+    /// coordinates) and looks at the centre, image up = model +z (see look_at); the distance is
+    /// camera_distance(), or drawn from [camera_distance(), max_distance]. The result's index is
+    /// the view sphere index. Throws std::out_of_range past view_count().
     RenderedView render_view(std::size_t index) const;
     /// Renders the model from any camera: `scaled_model_to_camera` is the rigid motion from the
     /// model's file coordinates times scale() (metres) to the camera. The sensor noise is keyed

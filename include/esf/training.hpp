@@ -87,21 +87,32 @@ struct TrainingProgress {
     std::string model;              ///< "category/name" just finished; empty in the first call
 };
 
-/// Camera distance of training views by default (metres from the model's centre): a depth sensor
-/// looking at a table top from where a robot sees it (Kinect v1 works from 0.5 m; table scenes
-/// are taken at 0.6 to 1.0 m). The point density and the sensor noise of the views then match
-/// what the real sensor gives; an object in the image's middle half, as with PCL's renderer, is
-/// seen from far closer and with little noise (see BENCHMARKS.md for the effect on accuracy).
-inline constexpr double kTrainingCameraDistance = 0.8;
+/// Camera distances of training views by default (metres from the model's centre): each view's
+/// distance is drawn from [kTrainingCameraDistance, kTrainingMaxCameraDistance], where a depth
+/// sensor looking at a table top sees it from (Kinect v1 works from 0.5 m; table scenes are
+/// taken at 0.6 to 1.2 m). The point density and the sensor noise of the views then match what
+/// the real sensor gives; an object in the image's middle half, as with PCL's renderer, is seen
+/// from far closer and with little noise (see BENCHMARKS.md for the effect on accuracy).
+inline constexpr double kTrainingCameraDistance = 0.6;
+inline constexpr double kTrainingMaxCameraDistance = 1.2;
+/// Lowest camera elevation of training views by default (degrees above the model's xy plane):
+/// objects stand on a table and are seen from above, so the cameras below the model's
+/// horizontal plane (meshes are stored z up) are left out.
+inline constexpr double kTrainingMinElevation = 0.0;
 /// A model whose bounding sphere radius exceeds the camera distance / this factor is seen from
 /// that factor times its radius instead (it would not fit the image otherwise).
 inline constexpr double kTrainingMinDistanceFactor = 1.5;
+/// The descriptor training stores by default: ESF with the surface angle histograms.
+inline constexpr const char* kTrainingDescriptor = "esf-angles";
 
-/// The render options training uses by default: RenderOptions with the camera at
-/// kTrainingCameraDistance.
+/// The render options training uses by default: RenderOptions with the cameras of the upper
+/// half of the view sphere (kTrainingMinElevation) at kTrainingCameraDistance to
+/// kTrainingMaxCameraDistance.
 inline RenderOptions default_training_render() {
     RenderOptions render;
     render.distance = kTrainingCameraDistance;
+    render.max_distance = kTrainingMaxCameraDistance;
+    render.min_elevation = kTrainingMinElevation;
     return render;
 }
 
@@ -111,13 +122,14 @@ struct TrainingOptions {
     /// non-metric ones of a catalog, which get typical_extent() of their category. With
     /// render.distance set, a model larger than render.distance / kTrainingMinDistanceFactor
     /// is seen from kTrainingMinDistanceFactor times its bounding sphere radius; without it,
-    /// the distance follows render.fill_fraction.
+    /// the distance follows render.fill_fraction (render.max_distance is scaled with it).
     RenderOptions render = default_training_render();
     /// The descriptor stored: "esf" (our estimator with `esf`) or any other name of
     /// descriptor_names() (make_descriptor() with `descriptor_options`).
-    std::string descriptor = "esf";
-    EsfOptions esf;  ///< descriptor "esf"; esf.seed is ignored (see view_seed)
-    /// Any other descriptor; descriptor_options.seed is ignored (see view_seed).
+    std::string descriptor = kTrainingDescriptor;
+    EsfOptions esf;  ///< descriptor "esf" only; esf.seed is ignored (see view_seed)
+    /// Any other descriptor, the default esf-angles included (its ESF part takes
+    /// descriptor_options.samples); descriptor_options.seed is ignored (see view_seed).
     DescriptorOptions descriptor_options;
     std::uint64_t seed = 0;
     /// Views with fewer points (e.g. a thin object seen edge-on) are stored as skipped.
