@@ -11,6 +11,7 @@
 #include <string>
 #include <system_error>
 
+#include "atomic_file.hpp"
 #include "esf/error.hpp"
 #include "png_writer.hpp"
 
@@ -75,26 +76,8 @@ std::string base64(const std::vector<std::uint8_t>& bytes) {
     return out;
 }
 
-/// Writes `bytes` to `path` through a temporary file and a rename.
 void write_file(const fs::path& path, const void* data, std::size_t size) {
-    const fs::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(file_message(path.string(), 0, "cannot create " + tmp.string()));
-        out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
-        out.close();
-        if (!out) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw IoError(file_message(path.string(), 0, "write failed"));
-        }
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw IoError(file_message(path.string(), 0, "cannot rename the temporary file"));
-    }
+    detail::write_file_atomically(path, data, size);
 }
 
 void write_text(const fs::path& path, const std::string& text) {

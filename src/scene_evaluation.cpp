@@ -112,6 +112,8 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                                       const SceneEvaluationOptions& options) {
     SceneEvaluationReport report;
     report.scene_set = set.path;
+    report.grouping =
+        options.segmentation.grouping == Grouping::kConvexity ? "convexity" : "euclidean";
     std::map<std::string, SceneTypeSummary> types;
     double segment_ms = 0.0, recognize_ms = 0.0;
     std::size_t frames = 0;

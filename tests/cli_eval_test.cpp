@@ -277,6 +277,16 @@ TEST_F(CliEvalTest, ScenesThroughSegmentationAndRecognition) {
     EXPECT_EQ(j["types"][2]["found"], 1);
     EXPECT_EQ(j["types"][1]["merged"], 2);
 
+    // --report: scenes.json holds what --json prints; index.html the tables.
+    const fs::path report = dir() / "scene_report";
+    run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes) + " --report " +
+              quoted(report) + " --json");
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_EQ(read_text(report / "scenes.json"), run.out);
+    const std::string html = read_text(report / "index.html");
+    EXPECT_NE(html.find("<h2>All objects</h2>"), std::string::npos);
+    EXPECT_NE(html.find("mosd_learn28.pcd"), std::string::npos);
+
     // The table.
     run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes));
     ASSERT_EQ(run.code, 0) << run.err;

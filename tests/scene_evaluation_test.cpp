@@ -4,11 +4,13 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
 #include "esf/cloud_io.hpp"
 #include "esf/error.hpp"
+#include "esf/scene_report.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -64,6 +66,41 @@ TEST(ReadSceneSet, ClearErrorsWithLineNumbers) {
               std::string::npos);
     EXPECT_NE(error_of_set("scene_file,object_id,class\na.pcd,2\n").find("2 fields"),
               std::string::npos);
+}
+
+TEST(SceneReport, HtmlEscapesAndListsFailuresFirst) {
+    esf::SceneEvaluationReport report;
+    report.scene_set = "s.csv";
+    report.grouping = "convexity";
+    esf::SceneObjectOutcome ok, wrong;
+    ok.scene = "/x/a.pcd";
+    ok.segmentation.outcome = esf::SegmentOutcome::kFound;
+    ok.true_class = ok.predicted_class = "box";
+    ok.correct = true;
+    wrong.scene = "/x/b.pcd";
+    wrong.segmentation.outcome = esf::SegmentOutcome::kSplit;
+    wrong.true_class = "<can>";
+    report.objects = {ok, wrong};
+    esf::SceneTypeSummary all;
+    all.type = "all";
+    all.objects = 2;
+    all.found = 1;
+    all.labelled = 2;
+    all.correct = 1;
+    report.types = {all};
+    const std::string html = esf::scene_report_html(report, "t & u");
+    EXPECT_NE(html.find("<title>t &amp; u</title>"), std::string::npos);
+    EXPECT_NE(html.find("&lt;can&gt;"), std::string::npos);
+    EXPECT_EQ(html.find("<can>"), std::string::npos);
+    EXPECT_NE(html.find("<td>50.0 %</td>"), std::string::npos);
+    // The failure table lists b.pcd only; the full table both.
+    const std::size_t all_objects = html.find("<h2>All objects</h2>");
+    ASSERT_NE(all_objects, std::string::npos);
+    EXPECT_LT(html.find("b.pcd"), all_objects);
+    EXPECT_GT(html.find("a.pcd"), all_objects);
+    const nlohmann::json j = nlohmann::json::parse(esf::scene_report_json(report));
+    EXPECT_EQ(j["objects"][1]["outcome"], "split");
+    EXPECT_EQ(j["types"][0]["end_to_end"], 0.5);
 }
 
 // All 45 labelled mOSD learn scenes: convexity grouping finds far more objects as one cluster

@@ -18,6 +18,7 @@
 #include "esf/recognizer.hpp"
 #include "esf/report.hpp"
 #include "esf/scene_evaluation.hpp"
+#include "esf/scene_report.hpp"
 
 namespace esf::cli {
 
@@ -46,23 +47,6 @@ std::string percent_of(std::size_t a, std::size_t b) {
     return b ? percent_text(static_cast<double>(a) / static_cast<double>(b)) : "-";
 }
 
-nlohmann::json summary_json(const SceneTypeSummary& t) {
-    return {{"type", t.type},
-            {"scenes", t.scenes},
-            {"objects", t.objects},
-            {"found", t.found},
-            {"split", t.split},
-            {"merged", t.merged},
-            {"missed", t.missed},
-            {"found_rate", t.found_rate()},
-            {"clusters", t.clusters},
-            {"background_clusters", t.background_clusters},
-            {"shared_clusters", t.shared_clusters},
-            {"labelled", t.labelled},
-            {"correct", t.correct},
-            {"end_to_end", t.end_to_end()}};
-}
-
 RecognizerOptions recognizer_options(const EvalArgs& args) {
     RecognizerOptions options;
     options.k = args.k;
@@ -82,37 +66,19 @@ void run_scene_eval(const EvalArgs& args) {
     options.segmentation.threads = args.threads;
     Progress progress("eval", set.scenes.size());
     options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
-    const SceneEvaluationReport report = evaluate_scenes(recognizer, set, options);
+    SceneEvaluationReport report = evaluate_scenes(recognizer, set, options);
+    report.database = args.database;
     progress.finish();
     for (const SceneFailure& f : report.failures)
         std::fprintf(stderr, "esf: warning: %s\n", with_file(f.file, f.error).c_str());
 
+    if (!args.report.empty()) {
+        const SceneReportFiles files = write_scene_report(
+            args.report, report, args.title.empty() ? "esf eval: " + args.scenes : args.title);
+        if (!args.json) std::printf("report: %s\n\n", files.html.c_str());
+    }
     if (args.json) {
-        nlohmann::json out;
-        out["scene_set"] = report.scene_set;
-        out["database"] = args.database;
-        out["grouping"] = args.grouping == Grouping::kConvexity ? "convexity" : "euclidean";
-        out["types"] = nlohmann::json::array();
-        for (const SceneTypeSummary& t : report.types) out["types"].push_back(summary_json(t));
-        out["objects"] = nlohmann::json::array();
-        for (const SceneObjectOutcome& o : report.objects)
-            out["objects"].push_back({{"scene", o.scene},
-                                      {"type", o.type},
-                                      {"object_id", o.segmentation.object_id},
-                                      {"points", o.segmentation.points},
-                                      {"outcome", to_string(o.segmentation.outcome)},
-                                      {"coverage", o.segmentation.coverage},
-                                      {"purity", o.segmentation.purity},
-                                      {"parts", o.segmentation.parts},
-                                      {"class", o.true_class},
-                                      {"predicted", o.predicted_class},
-                                      {"correct", o.correct}});
-        out["failures"] = nlohmann::json::array();
-        for (const SceneFailure& f : report.failures)
-            out["failures"].push_back({{"file", f.file}, {"error", f.error}});
-        out["timings"] = {{"segment_ms_per_frame", report.segment_ms},
-                          {"recognize_ms_per_frame", report.recognize_ms}};
-        std::cout << out.dump(2) << '\n';
+        std::cout << scene_report_json(report);
     } else {
         std::printf("scene set %s: %zu scenes, %zu objects\n\n", report.scene_set.c_str(),
                     set.scenes.size(), report.objects.size());
@@ -179,8 +145,6 @@ void run_eval(const EvalArgs& args) {
     if (!args.scenes.empty()) {
         if (!args.test_set.empty() || args.synthetic)
             throw CLI::ValidationError("--scenes", "--scenes takes no TESTSET.csv or --synthetic");
-        if (!args.report.empty())
-            throw CLI::ValidationError("--report", "--report is not available with --scenes");
         run_scene_eval(args);
         return;
     }
@@ -287,7 +251,8 @@ void add_eval_command(CLI::App& app) {
         "                              object id), object_id, class and optionally scene_type.\n"
         "                              Per object: found (one cluster holds >= 80 % of it and\n"
         "                              is >= 80 % it), split, merged or missed; end-to-end:\n"
-        "                              found and named right; per scene type and overall\n"
+        "                              found and named right; per scene type and overall;\n"
+        "                              --report DIR writes scenes.json and index.html\n"
         "Each cloud is described with the database's descriptor and settings and its k nearest\n"
         "views are found (L1, with the learned weights when stored). 1-NN: the nearest view has\n"
         "the true class; k-NN: the true class is among the k nearest views' classes. Printed per\n"

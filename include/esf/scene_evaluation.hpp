@@ -82,6 +82,8 @@ struct SceneFailure {
 
 struct SceneEvaluationReport {
     std::string scene_set;
+    std::string database;  ///< for reports; evaluate_scenes() leaves it empty
+    std::string grouping;  ///< "convexity" or "euclidean"
     std::vector<SceneObjectOutcome> objects;
     std::vector<SceneTypeSummary> types;  ///< by type name, then "all"
     std::vector<SceneFailure> failures;   ///< scenes that could not be read or segmented

@@ -1,0 +1,171 @@
+#include "esf/scene_report.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <system_error>
+
+#include "atomic_file.hpp"
+#include "esf/error.hpp"
+
+namespace esf {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string html_escape(const std::string& s) {
+    std::string out;
+    for (const char c : s) {
+        switch (c) {
+            case '&':
+                out += "&amp;";
+                break;
+            case '<':
+                out += "&lt;";
+                break;
+            case '>':
+                out += "&gt;";
+                break;
+            case '"':
+                out += "&quot;";
+                break;
+            default:
+                out += c;
+        }
+    }
+    return out;
+}
+
+std::string percent(double fraction) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.1f %%", 100.0 * fraction);
+    return buffer;
+}
+
+std::string share(std::size_t a, std::size_t b) {
+    return b ? percent(static_cast<double>(a) / static_cast<double>(b)) : "-";
+}
+
+void object_rows(std::ostringstream& html, const SceneEvaluationReport& report, bool failed_only) {
+    html << "<table><tr><th>scene</th><th>type</th><th>object</th><th>points</th>"
+            "<th>outcome</th><th>coverage</th><th>purity</th><th>parts</th><th>class</th>"
+            "<th>named</th></tr>\n";
+    for (const SceneObjectOutcome& o : report.objects) {
+        const bool found = o.segmentation.outcome == SegmentOutcome::kFound;
+        if (failed_only && o.correct) continue;
+        html << "<tr class=\"" << (o.correct ? "ok" : found ? "named" : "seg") << "\"><td>"
+             << html_escape(fs::path(o.scene).filename().string()) << "</td><td>"
+             << html_escape(o.type) << "</td><td>" << o.segmentation.object_id << "</td><td>"
+             << o.segmentation.points << "</td><td>" << to_string(o.segmentation.outcome)
+             << "</td><td>" << percent(o.segmentation.coverage) << "</td><td>"
+             << percent(o.segmentation.purity) << "</td><td>" << o.segmentation.parts
+             << "</td><td>" << html_escape(o.true_class.empty() ? "-" : o.true_class)
+             << "</td><td>" << html_escape(o.predicted_class.empty() ? "-" : o.predicted_class)
+             << "</td></tr>\n";
+    }
+    html << "</table>\n";
+}
+
+}  // namespace
+
+std::string scene_report_json(const SceneEvaluationReport& report) {
+    nlohmann::json out;
+    out["scene_set"] = report.scene_set;
+    out["database"] = report.database;
+    out["grouping"] = report.grouping;
+    out["types"] = nlohmann::json::array();
+    for (const SceneTypeSummary& t : report.types)
+        out["types"].push_back({{"type", t.type},
+                                {"scenes", t.scenes},
+                                {"objects", t.objects},
+                                {"found", t.found},
+                                {"split", t.split},
+                                {"merged", t.merged},
+                                {"missed", t.missed},
+                                {"found_rate", t.found_rate()},
+                                {"clusters", t.clusters},
+                                {"background_clusters", t.background_clusters},
+                                {"shared_clusters", t.shared_clusters},
+                                {"labelled", t.labelled},
+                                {"correct", t.correct},
+                                {"end_to_end", t.end_to_end()}});
+    out["objects"] = nlohmann::json::array();
+    for (const SceneObjectOutcome& o : report.objects)
+        out["objects"].push_back({{"scene", o.scene},
+                                  {"type", o.type},
+                                  {"object_id", o.segmentation.object_id},
+                                  {"points", o.segmentation.points},
+                                  {"outcome", to_string(o.segmentation.outcome)},
+                                  {"coverage", o.segmentation.coverage},
+                                  {"purity", o.segmentation.purity},
+                                  {"parts", o.segmentation.parts},
+                                  {"class", o.true_class},
+                                  {"predicted", o.predicted_class},
+                                  {"correct", o.correct}});
+    out["failures"] = nlohmann::json::array();
+    for (const SceneFailure& f : report.failures)
+        out["failures"].push_back({{"file", f.file}, {"error", f.error}});
+    out["timings"] = {{"segment_ms_per_frame", report.segment_ms},
+                      {"recognize_ms_per_frame", report.recognize_ms}};
+    return out.dump(2) + "\n";
+}
+
+std::string scene_report_html(const SceneEvaluationReport& report, const std::string& title) {
+    std::ostringstream html;
+    html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>"
+         << html_escape(title)
+         << "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:70em}"
+            "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;"
+            "padding:2px 8px;text-align:right}th{background:#eee}td:first-child,"
+            "th:first-child{text-align:left}tr.seg td{background:#fde0dc}tr.named "
+            "td{background:#fff4d6}</style></head><body>\n<h1>"
+         << html_escape(title) << "</h1>\n<p>Scene set " << html_escape(report.scene_set)
+         << (report.database.empty() ? "" : ", database " + html_escape(report.database))
+         << ", grouping " << html_escape(report.grouping)
+         << ". Found: one cluster holds at least 80 % of the object and is at least 80 % that "
+            "object; end to end: found and named right.</p>\n";
+    html << "<table><tr><th>scene type</th><th>scenes</th><th>objects</th><th>found</th>"
+            "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
+            "<th>one cluster</th><th>end to end</th></tr>\n";
+    for (const SceneTypeSummary& t : report.types)
+        html << "<tr><td>" << html_escape(t.type) << "</td><td>" << t.scenes << "</td><td>"
+             << t.objects << "</td><td>" << t.found << "</td><td>" << t.split << "</td><td>"
+             << t.merged << "</td><td>" << t.missed << "</td><td>" << t.shared_clusters
+             << "</td><td>" << share(t.found, t.objects) << "</td><td>"
+             << share(t.correct, t.labelled) << "</td></tr>\n";
+    char timing[160];
+    std::snprintf(timing, sizeof timing,
+                  "</table>\n<p>Segmentation %.2f ms, description and classification %.2f ms "
+                  "per frame.</p>\n",
+                  report.segment_ms, report.recognize_ms);
+    html << timing;
+    for (const SceneFailure& f : report.failures)
+        html << "<p class=\"failure\">Not evaluated: " << html_escape(f.file) << ": "
+             << html_escape(f.error) << "</p>\n";
+    html << "<h2>Objects not found or not named right</h2>\n";
+    object_rows(html, report, true);
+    html << "<h2>All objects</h2>\n";
+    object_rows(html, report, false);
+    html << "</body></html>\n";
+    return html.str();
+}
+
+SceneReportFiles write_scene_report(const std::string& dir, const SceneEvaluationReport& report,
+                                    const std::string& title) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir))
+        throw IoError(file_message(dir, 0, "cannot create the report folder"));
+    SceneReportFiles files;
+    files.json = (fs::path(dir) / "scenes.json").string();
+    files.html = (fs::path(dir) / "index.html").string();
+    const std::string json = scene_report_json(report);
+    const std::string html = scene_report_html(report, title);
+    detail::write_file_atomically(files.json, json.data(), json.size());
+    detail::write_file_atomically(files.html, html.data(), html.size());
+    return files;
+}
+
+}  // namespace esf
