@@ -55,15 +55,17 @@ void object_rows(std::ostringstream& html, const SceneEvaluationReport& report, 
     for (const SceneObjectOutcome& o : report.objects) {
         const bool found = o.segmentation.outcome == SegmentOutcome::kFound;
         if (failed_only && o.correct) continue;
-        html << "<tr class=\"" << (o.correct ? "ok" : found ? "named" : "seg") << "\"><td>"
-             << html_escape(fs::path(o.scene).filename().string()) << "</td><td>"
+        html << "<tr class=\""
+             << (o.correct ? "ok"
+                 : found   ? "named"
+                           : "seg")
+             << "\"><td>" << html_escape(fs::path(o.scene).filename().string()) << "</td><td>"
              << html_escape(o.type) << "</td><td>" << o.segmentation.object_id << "</td><td>"
              << o.segmentation.points << "</td><td>" << to_string(o.segmentation.outcome)
              << "</td><td>" << percent(o.segmentation.coverage) << "</td><td>"
-             << percent(o.segmentation.purity) << "</td><td>" << o.segmentation.parts
-             << "</td><td>" << html_escape(o.true_class.empty() ? "-" : o.true_class)
-             << "</td><td>" << html_escape(o.predicted_class.empty() ? "-" : o.predicted_class)
-             << "</td></tr>\n";
+             << percent(o.segmentation.purity) << "</td><td>" << o.segmentation.parts << "</td><td>"
+             << html_escape(o.true_class.empty() ? "-" : o.true_class) << "</td><td>"
+             << html_escape(o.predicted_class.empty() ? "-" : o.predicted_class) << "</td></tr>\n";
     }
     html << "</table>\n";
 }
