@@ -457,6 +457,29 @@ std::vector<std::string> stored_model_groups(const DescriptorMatrix& matrix) {
     return out;
 }
 
+namespace {
+
+/// The report of a synthetic evaluation from its outcomes and per-query match times.
+EvaluationReport synthetic_report(std::span<const QueryOutcome> outcomes,
+                                  const DescriptorMatrix& matrix, const SyntheticOptions& options,
+                                  const std::string& test_set, int threads,
+                                  const std::vector<double>& match_s,
+                                  std::chrono::steady_clock::time_point start) {
+    EvaluationReport report = evaluate(outcomes, options.k, matrix.categories);
+    report.mode = "synthetic";
+    report.test_set = test_set;
+    report.descriptor = matrix.kind.name;
+    report.weighted = !options.weights.empty();
+    report.threads = threads;
+    double sum = 0.0;
+    for (const double s : match_s) sum += s;
+    report.match_ms = match_s.empty() ? 0.0 : 1000.0 * sum / static_cast<double>(match_s.size());
+    report.total_seconds = seconds_since(start);
+    return report;
+}
+
+}  // namespace
+
 EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
                                     const SyntheticOptions& options) {
     const std::string what = "evaluate_synthetic";
@@ -489,17 +512,9 @@ EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
         progress.tick();
     });
 
-    EvaluationReport report = evaluate(outcomes, options.k, matrix.categories);
-    report.mode = "synthetic";
-    report.test_set = options.groups.empty() ? "leave-one-model-out" : "leave-one-group-out";
-    report.descriptor = matrix.kind.name;
-    report.weighted = !options.weights.empty();
-    report.threads = threads;
-    double sum = 0.0;
-    for (const double s : match_s) sum += s;
-    report.match_ms = queries.empty() ? 0.0 : 1000.0 * sum / static_cast<double>(queries.size());
-    report.total_seconds = seconds_since(start);
-    return report;
+    return synthetic_report(outcomes, matrix, options,
+                            options.groups.empty() ? "leave-one-model-out" : "leave-one-group-out",
+                            threads, match_s, start);
 }
 
 EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const DescriptorMatrix& queries,
@@ -559,17 +574,7 @@ EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const Descrip
         if (o.neighbours.empty()) o.error = "no views outside its group";
         progress.tick();
     });
-    EvaluationReport report = evaluate(outcomes, options.k, matrix.categories);
-    report.mode = "synthetic";
-    report.test_set = "held-out views";
-    report.descriptor = matrix.kind.name;
-    report.weighted = !options.weights.empty();
-    report.threads = threads;
-    double sum = 0.0;
-    for (const double x : match_s) sum += x;
-    report.match_ms = picked.empty() ? 0.0 : 1000.0 * sum / static_cast<double>(picked.size());
-    report.total_seconds = seconds_since(start);
-    return report;
+    return synthetic_report(outcomes, matrix, options, "held-out views", threads, match_s, start);
 }
 
 }  // namespace esf

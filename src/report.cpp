@@ -13,6 +13,7 @@
 
 #include "atomic_file.hpp"
 #include "esf/error.hpp"
+#include "markup.hpp"
 #include "png_writer.hpp"
 
 namespace esf {
@@ -23,32 +24,7 @@ namespace fs = std::filesystem;
 
 // ---- text helpers ---------------------------------------------------------------------------
 
-std::string xml_escape(const std::string& s) {
-    std::string out;
-    out.reserve(s.size());
-    for (const char c : s) {
-        switch (c) {
-            case '&':
-                out += "&amp;";
-                break;
-            case '<':
-                out += "&lt;";
-                break;
-            case '>':
-                out += "&gt;";
-                break;
-            case '"':
-                out += "&quot;";
-                break;
-            case '\'':
-                out += "&#39;";
-                break;
-            default:
-                out += c;
-        }
-    }
-    return out;
-}
+using detail::xml_escape;
 
 std::string fixed(double v, int digits) {
     char buffer[64];

@@ -8,6 +8,7 @@
 
 #include "atomic_file.hpp"
 #include "esf/error.hpp"
+#include "markup.hpp"
 
 namespace esf {
 
@@ -15,28 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string html_escape(const std::string& s) {
-    std::string out;
-    for (const char c : s) {
-        switch (c) {
-            case '&':
-                out += "&amp;";
-                break;
-            case '<':
-                out += "&lt;";
-                break;
-            case '>':
-                out += "&gt;";
-                break;
-            case '"':
-                out += "&quot;";
-                break;
-            default:
-                out += c;
-        }
-    }
-    return out;
-}
+using detail::xml_escape;
 
 std::string percent(double fraction) {
     char buffer[32];
@@ -59,13 +39,13 @@ void object_rows(std::ostringstream& html, const SceneEvaluationReport& report, 
              << (o.correct ? "ok"
                  : found   ? "named"
                            : "seg")
-             << "\"><td>" << html_escape(fs::path(o.scene).filename().string()) << "</td><td>"
-             << html_escape(o.type) << "</td><td>" << o.segmentation.object_id << "</td><td>"
+             << "\"><td>" << xml_escape(fs::path(o.scene).filename().string()) << "</td><td>"
+             << xml_escape(o.type) << "</td><td>" << o.segmentation.object_id << "</td><td>"
              << o.segmentation.points << "</td><td>" << to_string(o.segmentation.outcome)
              << "</td><td>" << percent(o.segmentation.coverage) << "</td><td>"
              << percent(o.segmentation.purity) << "</td><td>" << o.segmentation.parts << "</td><td>"
-             << html_escape(o.true_class.empty() ? "-" : o.true_class) << "</td><td>"
-             << html_escape(o.predicted_class.empty() ? "-" : o.predicted_class) << "</td></tr>\n";
+             << xml_escape(o.true_class.empty() ? "-" : o.true_class) << "</td><td>"
+             << xml_escape(o.predicted_class.empty() ? "-" : o.predicted_class) << "</td></tr>\n";
     }
     html << "</table>\n";
 }
@@ -117,22 +97,22 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
 std::string scene_report_html(const SceneEvaluationReport& report, const std::string& title) {
     std::ostringstream html;
     html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>"
-         << html_escape(title)
+         << xml_escape(title)
          << "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:70em}"
             "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;"
             "padding:2px 8px;text-align:right}th{background:#eee}td:first-child,"
             "th:first-child{text-align:left}tr.seg td{background:#fde0dc}tr.named "
             "td{background:#fff4d6}</style></head><body>\n<h1>"
-         << html_escape(title) << "</h1>\n<p>Scene set " << html_escape(report.scene_set)
-         << (report.database.empty() ? "" : ", database " + html_escape(report.database))
-         << ", grouping " << html_escape(report.grouping)
+         << xml_escape(title) << "</h1>\n<p>Scene set " << xml_escape(report.scene_set)
+         << (report.database.empty() ? "" : ", database " + xml_escape(report.database))
+         << ", grouping " << xml_escape(report.grouping)
          << ". Found: one cluster holds at least 80 % of the object and is at least 80 % that "
             "object; end to end: found and named right.</p>\n";
     html << "<table><tr><th>scene type</th><th>scenes</th><th>objects</th><th>found</th>"
             "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
             "<th>one cluster</th><th>end to end</th></tr>\n";
     for (const SceneTypeSummary& t : report.types)
-        html << "<tr><td>" << html_escape(t.type) << "</td><td>" << t.scenes << "</td><td>"
+        html << "<tr><td>" << xml_escape(t.type) << "</td><td>" << t.scenes << "</td><td>"
              << t.objects << "</td><td>" << t.found << "</td><td>" << t.split << "</td><td>"
              << t.merged << "</td><td>" << t.missed << "</td><td>" << t.shared_clusters
              << "</td><td>" << share(t.found, t.objects) << "</td><td>"
@@ -144,8 +124,8 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
                   report.segment_ms, report.recognize_ms);
     html << timing;
     for (const SceneFailure& f : report.failures)
-        html << "<p class=\"failure\">Not evaluated: " << html_escape(f.file) << ": "
-             << html_escape(f.error) << "</p>\n";
+        html << "<p class=\"failure\">Not evaluated: " << xml_escape(f.file) << ": "
+             << xml_escape(f.error) << "</p>\n";
     html << "<h2>Objects not found or not named right</h2>\n";
     object_rows(html, report, true);
     html << "<h2>All objects</h2>\n";

@@ -24,6 +24,7 @@
 #include "esf/mesh.hpp"
 #include "esf/render.hpp"
 #include "esf/surface_angles.hpp"
+#include "facing_square.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -53,17 +54,7 @@ Points partial_cylinder(std::size_t count = 4000, unsigned seed = 7) {
     return points;
 }
 
-/// A square of side `side` on a regular 2 mm grid at depth `z`, centred on the optical axis,
-/// facing the sensor.
-Points facing_square(float side = 0.2f, float z = 1.0f) {
-    Points points;
-    const int steps = static_cast<int>(std::lround(side / 0.002f));
-    for (int i = 0; i <= steps; ++i)
-        for (int j = 0; j <= steps; ++j)
-            points.emplace_back(-side / 2 + 0.002f * static_cast<float>(i),
-                                -side / 2 + 0.002f * static_cast<float>(j), z);
-    return points;
-}
+using esf::test::facing_square;
 
 /// The three faces of a 15 cm cube that meet at the corner nearest the sensor, each on a
 /// regular 2 mm grid; the corner's diagonal points at the sensor from 0.9 m.

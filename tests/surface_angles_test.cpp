@@ -10,23 +10,14 @@
 #include <string>
 
 #include "error_of.hpp"
+#include "facing_square.hpp"
 
 namespace esf {
 namespace {
 
 using test::error_of;
 
-/// A square of side `side` on a regular 2 mm grid at depth `z`, centred on the optical axis,
-/// facing the sensor.
-Points facing_square(float side, float z) {
-    Points points;
-    const int steps = static_cast<int>(std::lround(side / 0.002f));
-    for (int i = 0; i <= steps; ++i)
-        for (int j = 0; j <= steps; ++j)
-            points.emplace_back(-side / 2 + 0.002f * static_cast<float>(i),
-                                -side / 2 + 0.002f * static_cast<float>(j), z);
-    return points;
-}
+using test::facing_square;
 
 /// The front half of a cylinder (radius 5 cm, height 12 cm, axis along y) 0.8 m in front of
 /// the sensor, on a regular grid of 1 degree by 2 mm.
