@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -12,6 +13,7 @@
 #include <string_view>
 #include <utility>
 
+#include "csv.hpp"
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
 #include "esf/parallel.hpp"
@@ -48,66 +50,6 @@ std::uint64_t fnv1a(std::string_view s) {
         h *= 0x100000001B3ull;
     }
     return h;
-}
-
-// ---- catalog CSV ----------------------------------------------------------------------------
-
-/// Reads one RFC 4180 record; false at the end of the input. `line` is the record's first line
-/// on return and advances past it.
-bool read_record(std::istream& in, const std::string& path, std::size_t& line,
-                 std::size_t& record_line, std::vector<std::string>& fields) {
-    fields.clear();
-    if (in.peek() == std::char_traits<char>::eof()) return false;
-    record_line = line;
-    std::string field;
-    bool quoted = false;
-    bool after_quote = false;
-    for (;;) {
-        const int c = in.get();
-        if (c == std::char_traits<char>::eof()) {
-            if (quoted) throw IoError(file_message(path, record_line, "unterminated quoted field"));
-            break;
-        }
-        if (quoted) {
-            if (c == '"') {
-                if (in.peek() == '"') {
-                    in.get();
-                    field += '"';
-                } else {
-                    quoted = false;
-                    after_quote = true;
-                }
-            } else {
-                if (c == '\n') ++line;
-                field += static_cast<char>(c);
-            }
-            continue;
-        }
-        if (c == ',') {
-            fields.push_back(std::move(field));
-            field.clear();
-            after_quote = false;
-        } else if (c == '\n') {
-            ++line;
-            break;
-        } else if (c == '\r') {
-            // CRLF line ends
-        } else if (c == '"' && field.empty() && !after_quote) {
-            quoted = true;
-        } else {
-            if (after_quote)
-                throw IoError(file_message(path, record_line, "text after a closing quote"));
-            field += static_cast<char>(c);
-        }
-    }
-    fields.push_back(std::move(field));
-    return true;
-}
-
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t");
-    if (b == std::string::npos) return {};
-    return s.substr(b, s.find_last_not_of(" \t") - b + 1);
 }
 
 /// Longest sides (metres) of typical household objects, for categories whose catalog has no
@@ -392,21 +334,24 @@ const CatalogEntry* Catalog::find(const std::string& file) const {
 Catalog read_catalog(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(file_message(path, 0, "cannot open catalog"));
-    std::size_t line = 1, record_line = 1;
-    std::vector<std::string> fields;
-    if (!read_record(in, path, line, record_line, fields))
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw IoError(file_message(path, 0, "read failed"));
+    const std::vector<detail::CsvRecord> records = detail::parse_csv(text, path);
+    if (records.empty())
         throw IoError(file_message(path, 0, "empty catalog (expected a header line)"));
     std::map<std::string, std::size_t> column;
-    for (std::size_t i = 0; i < fields.size(); ++i) column[lower(trim(fields[i]))] = i;
+    for (std::size_t i = 0; i < records[0].fields.size(); ++i)
+        column[detail::lower(detail::trim(records[0].fields[i]))] = i;
     if (!column.count("file")) throw IoError(file_message(path, 1, "header has no 'file' column"));
-    const std::size_t columns = fields.size();
-    auto get = [&](const char* name) -> std::string {
-        const auto it = column.find(name);
-        return it == column.end() ? std::string() : trim(fields[it->second]);
-    };
+    const std::size_t columns = records[0].fields.size();
     Catalog catalog;
-    while (read_record(in, path, line, record_line, fields)) {
-        if (fields.size() == 1 && trim(fields[0]).empty()) continue;  // blank line
+    for (std::size_t r = 1; r < records.size(); ++r) {
+        const std::vector<std::string>& fields = records[r].fields;
+        const std::size_t record_line = records[r].line;
+        auto get = [&](const char* name) -> std::string {
+            const auto it = column.find(name);
+            return it == column.end() ? std::string() : detail::trim(fields[it->second]);
+        };
         if (fields.size() != columns)
             throw IoError(file_message(path, record_line,
                                        std::to_string(fields.size()) + " fields, the header has " +

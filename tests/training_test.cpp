@@ -238,6 +238,14 @@ TEST_F(TrainingTest, CatalogErrorsNameFileAndLine) {
               p + ":2: metric 'maybe' is not yes or no");
     touch("catalog.csv", "file,note\nbox/a.obj,\"open\n");
     EXPECT_EQ(error_of<IoError>([&] { read_catalog(p); }), p + ":2: unterminated quoted field");
+    // A UTF-8 byte order mark (spreadsheets write one) and CRLF line ends are accepted.
+    touch("catalog.csv",
+          "\xEF\xBB\xBF"
+          "file,extent\r\nbox/a.obj,0.1\r\n");
+    const Catalog bom = read_catalog(p);
+    ASSERT_EQ(bom.entries.size(), 1u);
+    EXPECT_EQ(bom.entries[0].file, "box/a.obj");
+    EXPECT_EQ(bom.entries[0].extent, 0.1);
     touch("catalog.csv", "");
     EXPECT_EQ(error_of<IoError>([&] { read_catalog(p); }),
               p + ": empty catalog (expected a header line)");
