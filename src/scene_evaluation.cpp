@@ -99,6 +99,8 @@ SceneSet read_scene_set(std::istream& in, const std::string& path) {
                      "' and '" + class_name + "'");
         scene.objects.push_back({id, class_name});
     }
+    if (set.scenes.empty())
+        throw IoError(file_message(path, header.line, "no scenes after the header"));
     return set;
 }
 
@@ -125,9 +127,10 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                 throw std::invalid_argument("the cloud has no per-point label field");
             auto start = std::chrono::steady_clock::now();
             SegmentationResult segmentation = segment_scene(cloud, options.segmentation);
-            segment_ms += ms_since(start);
+            const double segmented = ms_since(start);
             start = std::chrono::steady_clock::now();
             const SceneRecognition recognition = recognizer.recognize(std::move(segmentation));
+            segment_ms += segmented;
             recognize_ms += ms_since(start);
             ++frames;
 
@@ -137,15 +140,14 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
             const SegmentationScore score = score_segmentation(cloud.points, cloud.labels, clusters,
                                                                options.labels, options.criteria);
 
-            for (const std::string& type_name :
-                 {scene.type.empty() ? std::string() : scene.type, std::string("all")}) {
-                if (type_name.empty()) continue;
-                SceneTypeSummary& t = types[type_name];
-                t.type = type_name;
-                ++t.scenes;
-                t.clusters += score.clusters;
-                t.background_clusters += score.background_clusters;
-                t.shared_clusters += score.shared_clusters;
+            // The summaries this scene counts in: its type's and the overall one.
+            std::vector<SceneTypeSummary*> rows = {&types["all"]};
+            if (!scene.type.empty()) rows.push_back(&types[scene.type]);
+            for (SceneTypeSummary* t : rows) {
+                ++t->scenes;
+                t->clusters += score.clusters;
+                t->background_clusters += score.background_clusters;
+                t->shared_clusters += score.shared_clusters;
             }
             for (const ObjectSegmentation& o : score.objects) {
                 SceneObjectOutcome outcome;
@@ -162,17 +164,14 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                 outcome.correct = o.outcome == SegmentOutcome::kFound &&
                                   !outcome.true_class.empty() &&
                                   outcome.predicted_class == outcome.true_class;
-                for (const std::string& type_name :
-                     {scene.type.empty() ? std::string() : scene.type, std::string("all")}) {
-                    if (type_name.empty()) continue;
-                    SceneTypeSummary& t = types[type_name];
-                    ++t.objects;
-                    t.found += o.outcome == SegmentOutcome::kFound;
-                    t.split += o.outcome == SegmentOutcome::kSplit;
-                    t.merged += o.outcome == SegmentOutcome::kMerged;
-                    t.missed += o.outcome == SegmentOutcome::kMissed;
-                    t.labelled += !outcome.true_class.empty();
-                    t.correct += outcome.correct;
+                for (SceneTypeSummary* t : rows) {
+                    ++t->objects;
+                    t->found += o.outcome == SegmentOutcome::kFound;
+                    t->split += o.outcome == SegmentOutcome::kSplit;
+                    t->merged += o.outcome == SegmentOutcome::kMerged;
+                    t->missed += o.outcome == SegmentOutcome::kMissed;
+                    t->labelled += !outcome.true_class.empty();
+                    t->correct += outcome.correct;
                 }
                 report.objects.push_back(std::move(outcome));
             }
@@ -181,8 +180,10 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
         }
         if (options.progress) options.progress(s + 1, set.scenes.size());
     }
-    for (auto& [name, summary] : types)
+    for (auto& [name, summary] : types) {
+        summary.type = name;
         if (name != "all") report.types.push_back(summary);
+    }
     if (types.count("all")) report.types.push_back(types["all"]);
     if (frames) {
         report.segment_ms = segment_ms / static_cast<double>(frames);

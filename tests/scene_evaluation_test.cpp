@@ -48,6 +48,9 @@ std::string error_of_set(const std::string& text) {
 
 TEST(ReadSceneSet, ClearErrorsWithLineNumbers) {
     EXPECT_NE(error_of_set("").find("empty file"), std::string::npos);
+    EXPECT_NE(error_of_set("scene_file,object_id,class\n")
+                  .find("scenes.csv:1: no scenes after the header"),
+              std::string::npos);
     EXPECT_NE(error_of_set("scene_file,class\na,box\n").find("no 'object_id' column"),
               std::string::npos);
     EXPECT_NE(error_of_set("scene_file,object_id,class\na.pcd,x2,box\n")
