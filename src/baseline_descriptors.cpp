@@ -488,32 +488,54 @@ std::unique_ptr<GlobalDescriptor> make_pcl_descriptor(const std::string& name,
                                                       const DescriptorOptions& options) {
     if (name == "pcl-esf")
         return std::make_unique<PclEsf>(
-            DescriptorInfo{name, kEsfSize, false, false,
-                           "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)"},
+            with_esf_blocks(DescriptorInfo{
+                name,
+                kEsfSize,
+                false,
+                false,
+                "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)",
+                {},
+                {}}),
             options);
     if (name == "vfh")
         return std::make_unique<Vfh>(
-            DescriptorInfo{name, 308, false, true, "PCL VFH (Rusu et al. 2010)"}, options);
+            DescriptorInfo{name, 308, false, true, "PCL VFH (Rusu et al. 2010)", {}, {}}, options);
     if (name == "cvfh")
         return std::make_unique<Cvfh>(
-            DescriptorInfo{name, 308, true, true,
-                           "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)"},
+            DescriptorInfo{name,
+                           308,
+                           true,
+                           true,
+                           "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)",
+                           {},
+                           {}},
             options);
     if (name == "our-cvfh")
         return std::make_unique<OurCvfh>(
-            DescriptorInfo{name, 308, true, true,
+            DescriptorInfo{name,
+                           308,
+                           true,
+                           true,
                            "PCL OUR-CVFH, one signature per region and reference frame "
-                           "(Aldoma et al. 2012)"},
+                           "(Aldoma et al. 2012)",
+                           {},
+                           {}},
             options);
     if (name == "gasd")
         return std::make_unique<Gasd>(
-            DescriptorInfo{name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)"},
+            DescriptorInfo{
+                name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", {}, {}},
             options);
     if (name == "shot")
         return std::make_unique<Shot>(
-            DescriptorInfo{name, 352, false, true,
+            DescriptorInfo{name,
+                           352,
+                           false,
+                           true,
                            "PCL SHOT at the centroid, radius covering the object "
-                           "(Tombari et al. 2010)"},
+                           "(Tombari et al. 2010)",
+                           {},
+                           {}},
             options);
     return nullptr;
 }

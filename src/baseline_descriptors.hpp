@@ -19,6 +19,10 @@ Points describable_points(std::span<const Eigen::Vector3f> points, const std::st
 /// negative, or the sum is 0.
 bool normalise_signature(Signature& signature);
 
+/// `info` with ESF's ten blocks of kEsfBins bins (esf_block_names()), then the `extra` blocks.
+DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_sizes = {},
+                               std::span<const char* const> extra_names = {});
+
 /// The PCL baseline `name` (pcl-esf, vfh, cvfh, our-cvfh, gasd, shot), or nullptr when `name`
 /// is not one of them. Options are validated by the caller.
 std::unique_ptr<GlobalDescriptor> make_pcl_descriptor(const std::string& name,

@@ -62,9 +62,22 @@ bool normalise_signature(Signature& signature) {
     return true;
 }
 
+DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_sizes,
+                               std::span<const char* const> extra_names) {
+    for (const char* name : esf_block_names()) {
+        info.blocks.push_back(kEsfBins);
+        info.block_names.emplace_back(name);
+    }
+    info.blocks.insert(info.blocks.end(), extra_sizes.begin(), extra_sizes.end());
+    info.block_names.insert(info.block_names.end(), extra_names.begin(), extra_names.end());
+    return info;
+}
+
 }  // namespace detail
 
 namespace {
+
+using detail::with_esf_blocks;
 
 /// An EsfEstimatorPool whose errors name the descriptor ("<name>: " in front). The estimator
 /// drops non-finite points itself and rejects what describable_points() rejects, in the same
@@ -97,8 +110,14 @@ EsfOptions fast_esf_options(const DescriptorOptions& options) {
 class EsfGlobal final : public GlobalDescriptor {
   public:
     explicit EsfGlobal(const DescriptorOptions& options)
-        : info_{"esf", kEsfSize, false, true,
-                "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded"},
+        : info_(with_esf_blocks(
+              {"esf",
+               kEsfSize,
+               false,
+               true,
+               "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded",
+               {},
+               {}})),
           pool_(fast_esf_options(options)) {}
     const DescriptorInfo& info() const override { return info_; }
 
@@ -122,11 +141,21 @@ class EsfGlobal final : public GlobalDescriptor {
 class D2Global final : public GlobalDescriptor {
   public:
     D2Global(const DescriptorOptions& options, bool split)
-        : info_(split ? DescriptorInfo{"sdvs", 3 * kEsfBins, false, true,
+        : info_(split ? DescriptorInfo{"sdvs",
+                                       3 * kEsfBins,
+                                       false,
+                                       true,
                                        "SDVS: D2 split by voxel-line class IN, OUT, MIXED "
-                                       "(Wohlkinger & Vincze 2011)"}
-                      : DescriptorInfo{"d2", kEsfBins, false, true,
-                                       "D2 shape distribution (Osada et al. 2002)"}),
+                                       "(Wohlkinger & Vincze 2011)",
+                                       {kEsfBins, kEsfBins, kEsfBins},
+                                       {"d2_in", "d2_out", "d2_mixed"}}
+                      : DescriptorInfo{"d2",
+                                       kEsfBins,
+                                       false,
+                                       true,
+                                       "D2 shape distribution (Osada et al. 2002)",
+                                       {},
+                                       {}}),
           pool_(fast_esf_options(options)),
           split_(split) {}
     const DescriptorInfo& info() const override { return info_; }
@@ -158,6 +187,12 @@ class D2Global final : public GlobalDescriptor {
     bool split_;
 };
 
+constexpr std::array<int, kSurfaceAngleBlocks> kAngleBlockSizes = {
+    kSurfaceAngleBins, kSurfaceAngleBins,     kSurfaceAngleBins,
+    kSurfaceAngleBins, kSurfaceViewpointBins, kSurfaceVariationBins};
+constexpr std::array<const char*, kSurfaceAngleBlocks> kAngleBlockNames = {
+    "alpha", "phi", "theta", "s", "beta", "sigma"};
+
 /// ESF followed by the six surface angle histograms (surface_angles.hpp): the ESF part keeps
 /// its shape, the histograms are weighted kEsfAnglesWeight in all, then the whole signature is
 /// L1-normalised. The L1 distance of two signatures is so (L1_esf + L1_angles) / (1 + weight),
@@ -165,9 +200,15 @@ class D2Global final : public GlobalDescriptor {
 class EsfAnglesGlobal final : public GlobalDescriptor {
   public:
     explicit EsfAnglesGlobal(const DescriptorOptions& options)
-        : info_{"esf-angles", kEsfAnglesSize, false, true,
-                "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms (VFH's "
-                "angles, Rusu et al. 2010), seeded"},
+        : info_(with_esf_blocks({"esf-angles",
+                                 kEsfAnglesSize,
+                                 false,
+                                 true,
+                                 "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle "
+                                 "histograms (VFH's angles, Rusu et al. 2010), seeded",
+                                 {},
+                                 {}},
+                                kAngleBlockSizes, kAngleBlockNames)),
           pool_(fast_esf_options(options)),
           weight_(options.angles_weight) {}
     const DescriptorInfo& info() const override { return info_; }
@@ -234,6 +275,32 @@ std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
     if (name == "sdvs") return std::make_unique<D2Global>(options, true);
     if (name == "d2") return std::make_unique<D2Global>(options, false);
     return detail::make_pcl_descriptor(name, options);
+}
+
+DescriptorInfo descriptor_info(const std::string& name) { return make_descriptor(name)->info(); }
+
+std::vector<std::size_t> descriptor_blocks(const DescriptorInfo& info) {
+    if (info.blocks.empty()) return {static_cast<std::size_t>(info.dimension)};
+    return {info.blocks.begin(), info.blocks.end()};
+}
+
+std::vector<float> descriptor_dimension_weights(const DescriptorInfo& info,
+                                                std::span<const float> stored) {
+    const std::vector<std::size_t> blocks = descriptor_blocks(info);
+    const auto dimension = static_cast<std::size_t>(info.dimension);
+    for (const float w : stored)
+        if (!(w > 0.0f) || !std::isfinite(w))
+            throw std::invalid_argument(info.name + " weights must be finite and > 0, got " +
+                                        std::to_string(w));
+    if (stored.size() == dimension) return {stored.begin(), stored.end()};
+    if (stored.size() != blocks.size())
+        throw std::invalid_argument(info.name + " weights hold " + std::to_string(stored.size()) +
+                                    " values, expected " + std::to_string(blocks.size()) +
+                                    " (one per block) or " + std::to_string(dimension));
+    std::vector<float> out;
+    out.reserve(dimension);
+    for (std::size_t b = 0; b < blocks.size(); ++b) out.insert(out.end(), blocks[b], stored[b]);
+    return out;
 }
 
 }  // namespace esf

@@ -319,17 +319,14 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     KnnIndexOptions index_options;
     index_options.threads = options.threads;
     index_options.sketch_group = descriptor_sketch_group(kind.name);
-    const bool block_weighted = kind.name == "esf" || kind.name == "pcl-esf";
-    if (options.use_weights && block_weighted) {
+    if (options.use_weights) {
         if (const auto weights = db.weights(kind.name)) {
-            if (weights->size() == static_cast<std::size_t>(kEsfBlocks))
-                index_options.weights = expand_block_weights(*weights, kEsfBins);
-            else if (weights->size() == dim)
-                index_options.weights = *weights;
-            else
-                fail(kind.name + " weights hold " + std::to_string(weights->size()) +
-                     " values, expected " + std::to_string(kEsfBlocks) + " (one per block) or " +
-                     std::to_string(dim));
+            try {
+                index_options.weights =
+                    descriptor_dimension_weights(descriptor_info(kind.name), *weights);
+            } catch (const std::invalid_argument& e) {
+                fail(e.what());
+            }
             impl_->info.weighted = true;
         }
     }

@@ -535,9 +535,13 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     }
     result.plane = plane;
 
-    // 3./4. One pass: table points (projected, for the hull) and object candidates.
+    // 3./4. One pass: table points (projected, for the hull) and object candidates. In an
+    // organised frame the table's hull needs only each image row's first and last table pixel:
+    // the table lies in front of the camera, so the projection from the plane to the image
+    // keeps convexity, and a pixel between two table pixels of its row is never a hull vertex.
     const auto [u, w] = plane_basis(plane.normal);
     struct Part {
+        std::size_t table_points = 0;
         std::vector<Vec2> table;
         Octagon octagon;
         std::vector<Vec2> outside;
@@ -546,21 +550,40 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     std::vector<Part> parts(kChunks);
     parallel_for(kChunks, options.threads, [&](std::size_t c) {
         Part& part = parts[c];
+        std::uint32_t row = std::numeric_limits<std::uint32_t>::max();
+        std::uint32_t first = 0, last = 0;
+        auto close_row = [&] {
+            if (row == std::numeric_limits<std::uint32_t>::max()) return;
+            part.outside.emplace_back(u.dot(points[first]), w.dot(points[first]));
+            if (last != first) part.outside.emplace_back(u.dot(points[last]), w.dot(points[last]));
+        };
         for (std::size_t k = chunk_begin(c, finite.size()); k < chunk_begin(c + 1, finite.size());
              ++k) {
             const Eigen::Vector3f& p = points[finite[k]];
             const float h = plane.height(p);
             if (std::abs(h) <= options.plane_distance) {
-                part.table.emplace_back(u.dot(p), w.dot(p));
-                part.octagon.add(part.table.back());
+                ++part.table_points;
+                if (organised) {
+                    const std::uint32_t r = finite[k] / width;
+                    if (r != row) {
+                        close_row();
+                        row = r;
+                        first = finite[k];
+                    }
+                    last = finite[k];
+                } else {
+                    part.table.emplace_back(u.dot(p), w.dot(p));
+                    part.octagon.add(part.table.back());
+                }
             }
             if (h > options.min_height && h <= options.max_height)
                 part.candidates.push_back(finite[k]);
         }
+        close_row();
     });
     Octagon octagon;
     for (const Part& part : parts) {
-        result.plane_inliers += part.table.size();
+        result.plane_inliers += part.table_points;
         octagon.merge(part.octagon);
     }
     const double needed_points =
@@ -573,8 +596,10 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
                          std::to_string(static_cast<std::size_t>(std::ceil(needed_points))) + ")";
         return result;
     }
-    parallel_for(kChunks, options.threads,
-                 [&](std::size_t c) { octagon.append_outside(parts[c].table, parts[c].outside); });
+    if (!organised)
+        parallel_for(kChunks, options.threads, [&](std::size_t c) {
+            octagon.append_outside(parts[c].table, parts[c].outside);
+        });
     std::vector<Vec2> hull_candidates;
     std::vector<std::uint32_t> candidates;
     for (Part& part : parts) {

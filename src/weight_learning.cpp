@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "esf/descriptor.hpp"
 #include "esf/knn_index.hpp"
 #include "esf/parallel.hpp"
 #include "lomo_search.hpp"
@@ -47,11 +48,16 @@ std::vector<float> normalised(std::vector<double> w) {
 Exact exact_objective(const DescriptorMatrix& matrix, const detail::LomoSetup& setup,
                       const std::vector<std::size_t>& queries,
                       const std::vector<double>& query_weight, const std::vector<float>& w,
+                      const std::vector<std::size_t>& block_sizes,
                       const WeightLearningOptions& options, int threads) {
-    const auto dim = static_cast<std::size_t>(matrix.kind.dimension);
-    const std::size_t blocks = options.blocks, bins = dim / blocks, c = options.candidates;
-    const KnnIndex index =
-        detail::lomo_index(matrix, setup, expand_block_weights(w, bins), threads);
+    const std::size_t blocks = block_sizes.size(), c = options.candidates;
+    std::vector<std::size_t> block_begin(blocks + 1, 0);
+    std::vector<float> dimension_weights;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        block_begin[b + 1] = block_begin[b] + block_sizes[b];
+        dimension_weights.insert(dimension_weights.end(), block_sizes[b], w[b]);
+    }
+    const KnnIndex index = detail::lomo_index(matrix, setup, dimension_weights, threads);
     Exact out;
     CandidateSet& set = out.candidates;
     set.query_weight = query_weight;
@@ -78,7 +84,7 @@ Exact exact_objective(const DescriptorMatrix& matrix, const detail::LomoSetup& s
             float* out_d = &set.block_distance[(q * c + j) * blocks];
             for (std::size_t k = 0; k < blocks; ++k) {
                 double s = 0.0;
-                for (std::size_t i = k * bins; i < (k + 1) * bins; ++i)
+                for (std::size_t i = block_begin[k]; i < block_begin[k + 1]; ++i)
                     s += std::abs(static_cast<double>(a[i]) - static_cast<double>(b[i]));
                 out_d[k] = static_cast<float>(s);
             }
@@ -165,14 +171,20 @@ std::vector<double> pattern_search(const CandidateSet& set, const std::vector<do
     return x;
 }
 
-void check_options(const DescriptorMatrix& matrix, const WeightLearningOptions& o) {
+void check_options(const DescriptorMatrix& matrix, const WeightLearningOptions& o,
+                   const std::vector<std::size_t>& blocks) {
     auto fail = [](const std::string& what) {
         throw std::invalid_argument("learn_weights: " + what);
     };
-    if (o.blocks == 0) fail("blocks must be >= 1");
-    if (matrix.kind.dimension <= 0 || static_cast<std::size_t>(matrix.kind.dimension) % o.blocks)
-        fail("dimension " + std::to_string(matrix.kind.dimension) + " is not a multiple of " +
-             std::to_string(o.blocks) + " blocks");
+    if (blocks.empty()) fail("no blocks");
+    std::size_t total = 0;
+    for (const std::size_t size : blocks) {
+        if (size == 0) fail("a block of size 0");
+        total += size;
+    }
+    if (matrix.kind.dimension <= 0 || total != static_cast<std::size_t>(matrix.kind.dimension))
+        fail("blocks of " + std::to_string(total) + " bins in all for dimension " +
+             std::to_string(matrix.kind.dimension));
     if (o.candidates < 2) fail("candidates must be >= 2, got " + std::to_string(o.candidates));
     if (!(o.smooth >= 0.0) || !std::isfinite(o.smooth))
         fail("smooth must be finite and >= 0, got " + std::to_string(o.smooth));
@@ -187,9 +199,9 @@ void check_options(const DescriptorMatrix& matrix, const WeightLearningOptions& 
         fail("need 0 < min_weight < max_weight, got " + std::to_string(o.min_weight) + " and " +
              std::to_string(o.max_weight));
     if (!o.initial.empty()) {
-        if (o.initial.size() != o.blocks)
+        if (o.initial.size() != blocks.size())
             fail(std::to_string(o.initial.size()) + " initial weights for " +
-                 std::to_string(o.blocks) + " blocks");
+                 std::to_string(blocks.size()) + " blocks");
         for (const float v : o.initial)
             if (!(v > 0.0f) || !std::isfinite(v))
                 fail("initial weights must be finite and > 0, got " + std::to_string(v));
@@ -200,7 +212,10 @@ void check_options(const DescriptorMatrix& matrix, const WeightLearningOptions& 
 
 WeightLearningResult learn_weights(const DescriptorMatrix& matrix,
                                    const WeightLearningOptions& options) {
-    check_options(matrix, options);
+    const std::vector<std::size_t> blocks =
+        options.blocks.empty() ? descriptor_blocks(descriptor_info(matrix.kind.name))
+                               : options.blocks;
+    check_options(matrix, options, blocks);
     const int threads = resolve_threads(options.threads);
     const detail::LomoSetup setup = detail::lomo_setup(matrix, options.groups, "learn_weights");
     if (setup.multi_signature)
@@ -220,25 +235,27 @@ WeightLearningResult learn_weights(const DescriptorMatrix& matrix,
                 1.0 / static_cast<double>(classes * per_class[setup.view_category[queries[q]]]);
     }
 
-    std::vector<double> start(options.blocks, 1.0);
+    std::vector<double> start(blocks.size(), 1.0);
     for (std::size_t b = 0; b < options.initial.size(); ++b) start[b] = options.initial[b];
     std::vector<float> w = normalised(start);
 
-    Exact current = exact_objective(matrix, setup, queries, query_weight, w, options, threads);
+    Exact current =
+        exact_objective(matrix, setup, queries, query_weight, w, blocks, options, threads);
     WeightLearningResult result;
     result.queries = queries.size();
     result.objective_before = current.objective;
     result.top1_before = current.top1;
     double radius = options.trust_region;
     for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-        std::vector<double> x(options.blocks);
-        for (std::size_t b = 0; b < options.blocks; ++b) x[b] = std::log(static_cast<double>(w[b]));
+        std::vector<double> x(blocks.size());
+        for (std::size_t b = 0; b < blocks.size(); ++b) x[b] = std::log(static_cast<double>(w[b]));
         const std::vector<double> y = pattern_search(current.candidates, x, radius, options);
         if (y == x) break;  // no better weights among the candidates
-        std::vector<double> proposal(options.blocks);
-        for (std::size_t b = 0; b < options.blocks; ++b) proposal[b] = std::exp(y[b]);
+        std::vector<double> proposal(blocks.size());
+        for (std::size_t b = 0; b < blocks.size(); ++b) proposal[b] = std::exp(y[b]);
         const std::vector<float> v = normalised(proposal);
-        Exact next = exact_objective(matrix, setup, queries, query_weight, v, options, threads);
+        Exact next =
+            exact_objective(matrix, setup, queries, query_weight, v, blocks, options, threads);
         ++result.iterations;
         if (next.objective > current.objective) {
             w = v;

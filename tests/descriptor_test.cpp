@@ -146,7 +146,41 @@ TEST(DescriptorRegistry, NamesAndInfo) {
         EXPECT_EQ(info.multi_signature, name == "cvfh" || name == "our-cvfh") << name;
         EXPECT_EQ(info.deterministic, name != "pcl-esf") << name;
         EXPECT_FALSE(info.description.empty()) << name;
+        // Blocks, when listed, cover the signature exactly and each has a name.
+        EXPECT_EQ(info.block_names.size(), info.blocks.size()) << name;
+        const std::vector<std::size_t> blocks = esf::descriptor_blocks(info);
+        EXPECT_EQ(std::accumulate(blocks.begin(), blocks.end(), std::size_t{0}),
+                  static_cast<std::size_t>(info.dimension))
+            << name;
+        EXPECT_EQ(esf::descriptor_info(name).blocks, info.blocks) << name;
     }
+    EXPECT_EQ(esf::descriptor_info("esf").blocks, std::vector<int>(10, 64));
+    EXPECT_EQ(esf::descriptor_info("esf").block_names[6], "d2_in");
+    EXPECT_EQ(esf::descriptor_info("esf-angles").blocks.size(), 16u);
+    EXPECT_EQ(esf::descriptor_info("esf-angles").block_names[15], "sigma");
+    EXPECT_EQ(esf::descriptor_blocks(esf::descriptor_info("vfh")), std::vector<std::size_t>{308});
+}
+
+TEST(DescriptorRegistry, StoredWeightsExpandOverTheBlocks) {
+    const esf::DescriptorInfo info = esf::descriptor_info("esf-angles");
+    std::vector<float> stored(16);
+    std::iota(stored.begin(), stored.end(), 1.0f);
+    const std::vector<float> w = esf::descriptor_dimension_weights(info, stored);
+    ASSERT_EQ(w.size(), 724u);
+    EXPECT_EQ(w[0], 1.0f);
+    EXPECT_EQ(w[639], 10.0f);
+    EXPECT_EQ(w[640], 11.0f);  // alpha, 15 bins
+    EXPECT_EQ(w[700], 15.0f);  // 640 + 4 x 15 = 700: beta
+    EXPECT_EQ(w[715], 15.0f);  // last of beta's 16 bins
+    EXPECT_EQ(w[716], 16.0f);  // sigma
+    const std::vector<float> per_bin(724, 0.5f);
+    EXPECT_EQ(esf::descriptor_dimension_weights(info, per_bin), per_bin);
+    EXPECT_THROW(esf::descriptor_dimension_weights(info, std::vector<float>(10, 1.0f)),
+                 std::invalid_argument);
+    stored[3] = 0.0f;
+    EXPECT_THROW(esf::descriptor_dimension_weights(info, stored), std::invalid_argument);
+    stored[3] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(esf::descriptor_dimension_weights(info, stored), std::invalid_argument);
 }
 
 TEST(DescriptorRegistry, UnknownNameListsTheValidOnes) {

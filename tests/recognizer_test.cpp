@@ -211,7 +211,7 @@ TEST_F(RecognizerTest, NeighboursEqualBruteForceL1) {
     const fs::path dir = temp_dir();
     const std::string weighted_path = (dir / "weighted.sqlite").string();
     fs::copy_file(db_path_, weighted_path);
-    const std::vector<float> blocks = {1.0f, 0.5f,  2.0f, 0.0f, 1.5f,
+    const std::vector<float> blocks = {1.0f, 0.5f,  2.0f, 0.1f, 1.5f,
                                        1.0f, 0.25f, 3.0f, 1.0f, 0.75f};
     esf::Database(weighted_path, esf::OpenMode::kWrite).set_weights(blocks);
 

@@ -68,11 +68,29 @@ esf::DescriptorMatrix noisy_block_matrix(std::uint64_t seed) {
 
 esf::WeightLearningOptions small_options() {
     esf::WeightLearningOptions options;
-    options.blocks = kBlocks;
+    options.blocks.assign(kBlocks, kBins);
     options.max_queries = 0;
     options.candidates = 10;
     options.threads = 1;
     return options;
+}
+
+TEST(LearnWeights, BlocksMayDifferInSize) {
+    // The noise block split in two halves of 4 bins, then nine blocks of 8: both halves lose
+    // weight against the informative blocks (whose median holds; single ones drift).
+    const esf::DescriptorMatrix m = noisy_block_matrix(1);
+    esf::WeightLearningOptions options = small_options();
+    options.blocks = {kBins / 2, kBins / 2};
+    options.blocks.insert(options.blocks.end(), kBlocks - 1, kBins);
+    const esf::WeightLearningResult r = esf::learn_weights(m, options);
+    ASSERT_EQ(r.weights.size(), options.blocks.size());
+    std::vector<float> others(r.weights.begin() + 2, r.weights.end());
+    std::nth_element(others.begin(), others.begin() + 4, others.end());
+    std::string all;
+    for (const float w : r.weights) all += std::to_string(w) + " ";
+    EXPECT_LT(std::max(r.weights[0], r.weights[1]), others[4]) << "weights " << all;
+    EXPECT_LT(r.weights[0] + r.weights[1], others[4]) << "weights " << all;
+    EXPECT_GT(r.objective_after, r.objective_before);
 }
 
 TEST(LearnWeights, TheNoiseBlockLosesWeight) {
@@ -181,8 +199,10 @@ TEST(LearnWeights, RejectsBadInput) {
         return std::string("(no exception)");
     };
     esf::WeightLearningOptions options = small_options();
-    options.blocks = 7;
-    EXPECT_EQ(message(m, options), "learn_weights: dimension 80 is not a multiple of 7 blocks");
+    options.blocks.assign(7, kBins);
+    EXPECT_EQ(message(m, options), "learn_weights: blocks of 56 bins in all for dimension 80");
+    options.blocks = {kBins * kBlocks, 0};
+    EXPECT_EQ(message(m, options), "learn_weights: a block of size 0");
     options = small_options();
     options.candidates = 1;
     EXPECT_EQ(message(m, options), "learn_weights: candidates must be >= 2, got 1");

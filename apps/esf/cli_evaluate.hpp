@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "esf/database.hpp"
+#include "esf/descriptor.hpp"
 #include "esf/esf_descriptor.hpp"
 #include "esf/evaluation.hpp"
 #include "esf/knn_index.hpp"
@@ -15,21 +16,12 @@
 
 namespace esf::cli {
 
-/// Descriptors that take learned block weights (as Recognizer applies them).
-inline bool block_weighted(const std::string& descriptor) {
-    return descriptor == "esf" || descriptor == "pcl-esf";
-}
-
-/// Per-dimension weights from a database's stored weights of `matrix.kind` (empty: none, or not
-/// a block-weighted descriptor).
+/// Per-dimension weights from a database's stored weights of `matrix.kind` (empty: none).
 inline std::vector<float> stored_dimension_weights(const Database& db,
                                                    const DescriptorMatrix& matrix) {
-    if (!block_weighted(matrix.kind.name)) return {};
     const std::optional<std::vector<float>> w = db.weights(matrix.kind.name);
     if (!w) return {};
-    if (w->size() == static_cast<std::size_t>(kEsfBlocks))
-        return expand_block_weights(*w, static_cast<std::size_t>(kEsfBins));
-    return *w;
+    return descriptor_dimension_weights(descriptor_info(matrix.kind.name), *w);
 }
 
 /// Groups per model: from a catalog CSV when `catalog` is non-empty, else empty (one per model).

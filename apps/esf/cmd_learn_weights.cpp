@@ -1,5 +1,6 @@
-// esf learn-weights DB : learns the ten ESF sub-histogram weights on the database's synthetic
-// views (leave-one-model-out) and stores them with the database.
+// esf learn-weights DB : learns the weights of a descriptor's sub-histograms (ESF's ten, and
+// esf-angles' six surface angle histograms besides) on the database's synthetic views
+// (leave-one-model-out) and stores them with the database.
 
 #include <algorithm>
 #include <chrono>
@@ -15,7 +16,7 @@
 #include "cli_evaluate.hpp"
 #include "commands.hpp"
 #include "esf/database.hpp"
-#include "esf/esf_descriptor.hpp"
+#include "esf/descriptor.hpp"
 #include "esf/evaluation.hpp"
 #include "esf/weight_learning.hpp"
 
@@ -46,13 +47,11 @@ void run_learn_weights(const LearnArgs& args) {
         const Database db(args.database, OpenMode::kRead);
         matrix = db.load_descriptors(args.descriptor);
     }
-    if (!block_weighted(matrix.kind.name))
-        throw std::invalid_argument(args.database +
-                                    ": learned weights apply to esf and pcl-esf, "
-                                    "not to " +
-                                    matrix.kind.name);
+    const DescriptorInfo info = descriptor_info(matrix.kind.name);
+    if (descriptor_blocks(info).size() < 2)
+        throw std::invalid_argument(args.database + ": " + matrix.kind.name +
+                                    " has a single block: no block weights to learn");
     WeightLearningOptions options;
-    options.blocks = static_cast<std::size_t>(kEsfBlocks);
     options.groups = cli_model_groups(matrix, args.groups);
     options.max_queries = args.max_queries;
     options.max_iterations = args.iterations;
@@ -75,7 +74,7 @@ void run_learn_weights(const LearnArgs& args) {
     eval.threads = args.threads;
     eval.groups = options.groups;
     const EvaluationReport before = evaluate_synthetic(matrix, eval);
-    eval.weights = expand_block_weights(learned.weights, static_cast<std::size_t>(kEsfBins));
+    eval.weights = descriptor_dimension_weights(info, learned.weights);
     const EvaluationReport after = evaluate_synthetic(matrix, eval);
 
     if (!args.dry_run) {
@@ -84,7 +83,7 @@ void run_learn_weights(const LearnArgs& args) {
     }
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const auto& names = esf_block_names();
+    const std::vector<std::string>& names = info.block_names;
     const std::string protocol =
         options.groups.empty() ? "leave-one-model-out" : "leave-one-group-out";
     if (args.json) {
@@ -122,7 +121,7 @@ void run_learn_weights(const LearnArgs& args) {
         std::printf("%s weights (%s, %zu of %zu views as queries):\n", matrix.kind.name.c_str(),
                     protocol.c_str(), learned.queries, after.samples);
         for (std::size_t b = 0; b < learned.weights.size(); ++b)
-            std::printf("  %-9s %.4f\n", names[b], static_cast<double>(learned.weights[b]));
+            std::printf("  %-9s %.4f\n", names[b].c_str(), static_cast<double>(learned.weights[b]));
         std::printf("objective %.4f -> %.4f (%d iterations, %d accepted)\n",
                     learned.objective_before, learned.objective_after, learned.iterations,
                     learned.accepted);
@@ -148,8 +147,9 @@ void add_learn_weights_command(CLI::App& app) {
     auto args = std::make_shared<LearnArgs>();
     CLI::App* cmd = app.add_subcommand(
         "learn-weights",
-        "Learn the weights of the ten ESF sub-histograms (D2, D3, A3 and their IN/OUT/MIXED\n"
-        "splits, D2 ratio) on the database's own synthetic views, leave-one-model-out (with\n"
+        "Learn the weights of a descriptor's sub-histograms (ESF's ten: D2, D3, A3 and their\n"
+        "IN/OUT/MIXED splits, D2 ratio; esf-angles adds its six surface angle histograms)\n"
+        "on the database's own synthetic views, leave-one-model-out (with\n"
         "--groups: leave-one-group-out), and store them with the database; esf classify, scene\n"
         "and eval then use them (--no-weights there ignores them). The objective is the 1-NN\n"
         "accuracy (mean over classes) of up to --max-queries evenly spaced views plus a small\n"
@@ -161,7 +161,7 @@ void add_learn_weights_command(CLI::App& app) {
         ->required()
         ->check(CLI::ExistingFile);
     cmd->add_option("--descriptor", args->descriptor,
-                    "Descriptor kind when the database holds several (esf or pcl-esf)");
+                    "Descriptor kind when the database holds several (esf, esf-angles, ...)");
     cmd->add_option("--groups", args->groups,
                     "Catalog CSV (file, group columns): models of a group are left out together")
         ->check(CLI::ExistingFile);

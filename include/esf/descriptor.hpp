@@ -85,7 +85,23 @@ struct DescriptorInfo {
     bool multi_signature = false;  ///< may return several signatures per cloud (CVFH, OUR-CVFH)
     bool deterministic = true;     ///< the same input and options give the same output
     std::string description;       ///< one line: method and reference
+    /// Sub-histograms whose L1 distances may be weighted apart (weight learning, block
+    /// weights): their sizes in order, summing to `dimension`; empty means one block.
+    std::vector<int> blocks;
+    std::vector<std::string> block_names;  ///< one per block ("D2-IN", "alpha", ...)
 };
+
+/// What make_descriptor(name) computes, without computing anything. Throws like make_descriptor.
+DescriptorInfo descriptor_info(const std::string& name);
+
+/// The block sizes of `info` (one block of `dimension` when it lists none).
+std::vector<std::size_t> descriptor_blocks(const DescriptorInfo& info);
+
+/// Per-dimension weights from stored weights of `info`'s descriptor: one per block (expanded
+/// over the block's bins) or one per dimension (as they are). Throws std::invalid_argument for
+/// another count or a weight that is not finite and > 0.
+std::vector<float> descriptor_dimension_weights(const DescriptorInfo& info,
+                                                std::span<const float> stored);
 
 struct DescriptorOptions {
     /// esf, sdvs, d2: seed of the triple sampler (pcl-esf is seeded from the clock by PCL).

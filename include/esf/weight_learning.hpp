@@ -41,8 +41,10 @@ namespace esf {
 using WeightLearningProgress = std::function<void(int, double)>;
 
 struct WeightLearningOptions {
-    /// Blocks of the descriptor (dimension must be a multiple; ESF: kEsfBlocks of kEsfBins).
-    std::size_t blocks = 10;
+    /// Sizes of the blocks weighted apart, summing to the descriptor's dimension; empty: the
+    /// blocks the descriptor registry lists for matrix.kind (DescriptorInfo::blocks; ESF: ten
+    /// of kEsfBins).
+    std::vector<std::size_t> blocks;
     /// Group of each model (matrix.models order), as SyntheticOptions::groups; empty:
     /// leave-one-model-out.
     std::vector<std::string> groups;
@@ -59,14 +61,14 @@ struct WeightLearningOptions {
     /// Bounds of the search on each weight (before the weights are rescaled to mean 1).
     double min_weight = 0.01;
     double max_weight = 20.0;
-    /// Starting block weights (blocks values, finite, > 0); empty: all 1.
+    /// Starting block weights (one per block, finite, > 0); empty: all 1.
     std::vector<float> initial;
     int threads = 0;  ///< 0 = all cores
     WeightLearningProgress progress;
 };
 
 struct WeightLearningResult {
-    std::vector<float> weights;     ///< blocks values, mean 1
+    std::vector<float> weights;     ///< one per block, mean 1
     double objective_before = 0.0;  ///< exact objective of the initial weights
     double objective_after = 0.0;   ///< exact objective of `weights` (>= objective_before)
     double top1_before = 0.0;       ///< 1-NN accuracy per query, initial weights
