@@ -580,6 +580,26 @@ void label_from_objects(esf::PointCloud& scene, const std::vector<std::string>& 
     }
 }
 
+TEST(SegmentationRealScenes, OrganisedHullFromRowEndsEqualsTheFullHull) {
+    // An organised frame's table hull comes from each row's first and last table pixel; the
+    // same points without the image layout take the hull of every table point.
+    for (const char* name : {"real/scenes/mosd_learn3.pcd", "real/scenes/mosd_learn22.pcd",
+                             "real/scenes/mosd_learn39.pcd"}) {
+        ESF_REQUIRE_DATA(name);
+        const esf::PointCloud cloud = load_scene(name);
+        esf::SegmentationOptions options;
+        options.grouping = esf::Grouping::kEuclidean;
+        const esf::SegmentationResult organised = esf::segment_scene(cloud, options);
+        const esf::SegmentationResult flat = esf::segment_scene(
+            std::span<const Eigen::Vector3f>(cloud.points.data(), cloud.points.size()), options);
+        EXPECT_EQ(organised.plane_inliers, flat.plane_inliers) << name;
+        ASSERT_EQ(organised.clusters.size(), flat.clusters.size()) << name;
+        ASSERT_GT(organised.clusters.size(), 0u) << name;
+        for (std::size_t k = 0; k < flat.clusters.size(); ++k)
+            EXPECT_EQ(organised.clusters[k].indices, flat.clusters[k].indices) << name << " " << k;
+    }
+}
+
 TEST(SegmentationRealScenes, SameResultOnOneAndTwoThreads) {
     ESF_REQUIRE_DATA("real/scenes/mosd_learn39.pcd");
     const esf::PointCloud cloud = load_scene("real/scenes/mosd_learn39.pcd");
