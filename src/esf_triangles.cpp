@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "esf_simd.hpp"
+#include "splitmix64.hpp"
 
 // GCC 12 flags the deliberately undefined registers inside its own AVX-512 intrinsic headers.
 #pragma GCC diagnostic ignored "-Wuninitialized"
@@ -44,12 +45,7 @@ constexpr float kAcos[8] = {1.5707963050f, -0.2145988016f, 0.0889789874f, -0.050
                             0.0308918810f, -0.0170881256f, 0.0066700901f, -0.0012624911f};
 constexpr float kBinsPerRadian = static_cast<float>(kTopBin / (std::numbers::pi / 2.0));
 
-inline std::uint64_t splitmix64(std::uint64_t& state) {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
+using detail::splitmix64;
 
 /// 16 xoshiro128++ streams (Blackman & Vigna), state word w of lane l in s[w][l].
 struct Streams {

@@ -17,20 +17,16 @@
 #include <vector>
 
 #include "esf/parallel.hpp"
+#include "splitmix64.hpp"
 
 namespace esf::detail {
 
-/// SplitMix64 as a counter-based generator.
+/// SplitMix64 as a counter-based generator: stream `stream` of `seed`.
 class SplitMix {
   public:
     SplitMix(std::uint64_t seed, std::uint64_t stream)
-        : state_(seed * 0x9E3779B97F4A7C15ull ^ (stream + 1) * 0xD1B54A32D192ED03ull) {}
-    std::uint64_t next() {
-        std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
+        : state_(seed * kGoldenGamma ^ (stream + 1) * 0xD1B54A32D192ED03ull) {}
+    std::uint64_t next() { return splitmix64(state_); }
     /// Uniform in [0, 1).
     double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 

@@ -13,6 +13,7 @@
 #include "esf/knn_index.hpp"
 #include "esf/parallel.hpp"
 #include "neighbour_merge.hpp"
+#include "splitmix64.hpp"
 
 namespace esf {
 
@@ -99,10 +100,7 @@ class Describer {
 /// query as before), then seeds derived from it.
 std::uint64_t sampling_seed(std::uint64_t seed, int sampling) {
     if (sampling == 0) return seed;
-    std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * static_cast<std::uint64_t>(sampling);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
+    return detail::mix64(seed + detail::kGoldenGamma * static_cast<std::uint64_t>(sampling));
 }
 
 /// Our ESF with the database's options (estimators reused across calls, never shared); with

@@ -14,6 +14,7 @@
 #include "disjoint_sets.hpp"
 #include "esf/parallel.hpp"
 #include "occluded_parts.hpp"
+#include "splitmix64.hpp"
 
 namespace esf {
 
@@ -34,26 +35,11 @@ std::string format_metres(double value) {
     return buffer;
 }
 
-// SplitMix64 (Steele, Lea & Flood, OOPSLA 2014): one generator per RANSAC hypothesis, seeded
-// from (seed, hypothesis index), so results never depend on the scheduling.
-class SplitMix64 {
-  public:
-    SplitMix64(std::uint64_t seed, std::uint64_t index)
-        : state_(seed ^ (index * 0xD1B54A32D192ED03ull + 0x8CB92BA72F3D8DD7ull)) {}
-
-    std::uint64_t next() {
-        std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-
-    /// Uniform in [0, n) up to a bias below 2^-32 (n < 2^32).
-    std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
-
-  private:
-    std::uint64_t state_;
-};
+// One generator per RANSAC hypothesis, seeded from (seed, hypothesis index), so results never
+// depend on the scheduling.
+detail::SplitMix64 hypothesis_generator(std::uint64_t seed, std::uint64_t index) {
+    return detail::SplitMix64(seed ^ (index * 0xD1B54A32D192ED03ull + 0x8CB92BA72F3D8DD7ull));
+}
 
 std::size_t chunk_begin(std::size_t chunk, std::size_t count) { return chunk * count / kChunks; }
 
@@ -68,7 +54,7 @@ struct Hypothesis {
 
 Hypothesis plane_hypothesis(std::span<const Eigen::Vector3f> samples, std::uint64_t seed,
                             std::size_t index, float distance) {
-    SplitMix64 rng(seed, index);
+    detail::SplitMix64 rng = hypothesis_generator(seed, index);
     const std::size_t m = samples.size();
     const std::size_t i0 = rng.below(m);
     std::size_t i1 = rng.below(m);

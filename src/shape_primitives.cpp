@@ -7,18 +7,16 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "splitmix64.hpp"
+
 namespace esf::shapes {
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-std::uint64_t splitmix64(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ULL;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-    return x ^ (x >> 31);
-}
+/// The first output of a SplitMix64 generator started at `x`.
+std::uint64_t splitmix64(std::uint64_t x) { return detail::splitmix64(x); }
 
 Vec3 centroid(const Ring& ring) {
     Vec3 sum = Vec3::Zero();
@@ -37,13 +35,7 @@ void orient_outwards(Surface& surface) {
 
 // ---- Rng -------------------------------------------------------------------------------------
 
-std::uint64_t Rng::next() {
-    state_ += 0x9E3779B97F4A7C15ULL;
-    std::uint64_t z = state_;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-}
+std::uint64_t Rng::next() { return detail::splitmix64(state_); }
 
 double Rng::uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 

@@ -17,6 +17,7 @@
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
 #include "esf/parallel.hpp"
+#include "splitmix64.hpp"
 
 namespace esf {
 
@@ -35,12 +36,7 @@ bool hidden(const fs::path& p) {
     return name.empty() || name.front() == '.';
 }
 
-/// SplitMix64's output function: a bijective 64-bit mixer.
-std::uint64_t mix64(std::uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
+using detail::mix64;
 
 /// FNV-1a, a fixed string hash (std::hash may differ between library versions).
 std::uint64_t fnv1a(std::string_view s) {
@@ -408,7 +404,7 @@ std::uint64_t model_seed(std::uint64_t seed, const std::string& category, const 
 
 std::uint64_t view_seed(std::uint64_t model_seed_value, int view_index) {
     return mix64(model_seed_value +
-                 0x9E3779B97F4A7C15ull * (static_cast<std::uint64_t>(view_index) + 1));
+                 detail::kGoldenGamma * (static_cast<std::uint64_t>(view_index) + 1));
 }
 
 Settings training_settings(const TrainingOptions& options, bool rescale_non_metric) {
