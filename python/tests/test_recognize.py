@@ -2,6 +2,9 @@
 
 import json
 import signal
+import subprocess
+import sys
+import time
 
 import numpy as np
 import pytest
@@ -142,3 +145,34 @@ def test_train_progress_exception_stops_training(tmp_path, meshes):
     assert 2 <= len(esf.Database(path).models) < 10
     with pytest.raises(ValueError, match="descriptor"):
         esf.train(meshes, path, descriptor="nonsense")
+
+
+CHILD = """
+import sys, esf
+try:
+    esf.train(sys.argv[1], sys.argv[2], level=2, threads=1)
+except KeyboardInterrupt:
+    sys.exit(3)
+"""
+
+
+def stored_models(path):
+    try:
+        return len(esf.Database(path).models)
+    except OSError:  # not created yet
+        return 0
+
+
+def test_ctrl_c_stops_training_between_models(tmp_path, meshes):
+    """A real SIGINT while the C++ training runs (the GIL released, no progress callable) stops
+    it after the models in hand; what was committed stays and the next run resumes."""
+    path = tmp_path / "ctrl_c.sqlite"
+    child = subprocess.Popen([sys.executable, "-c", CHILD, str(meshes), str(path)])
+    while stored_models(path) == 0 and child.poll() is None:
+        time.sleep(0.02)
+    child.send_signal(signal.SIGINT)
+    assert child.wait(timeout=120) == 3  # 0 would mean it trained on to the end
+    stored = stored_models(path)
+    assert 1 <= stored < 10
+    result = esf.train(meshes, path, level=2, threads=1)
+    assert result["models_existing"] == stored and result["models_trained"] == 10 - stored
