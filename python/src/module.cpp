@@ -326,6 +326,7 @@ py::dict train_py(const fs::path& root, const fs::path& database, const std::str
     {
         py::gil_scoped_release release;
         result = with_files({&root}, [&] {
+            find_models(root.string());  // a missing root fails before the database is created
             Database db(database.string(), OpenMode::kWrite);
             return train(root.string(), db, options);
         });
@@ -611,7 +612,12 @@ PYBIND11_MODULE(_esf, m) {
                  });
              }),
              py::arg("database"), py::kw_only(), py::arg("k") = 10, py::arg("descriptor") = "",
-             py::arg("use_weights") = true, py::arg("samplings") = 1, py::arg("threads") = 0)
+             py::arg("use_weights") = true, py::arg("samplings") = 1, py::arg("threads") = 0,
+             "Opens DATABASE (esf train ... -o DATABASE): ``k`` views vote; ``descriptor`` picks "
+             "the kind when it holds several; ``use_weights`` applies its learned weights; "
+             "``samplings`` describes an ESF query that many times and averages; ``threads`` "
+             "0 = all cores. Raises FileNotFoundError / OSError for a missing or broken file, "
+             "ValueError for a database it cannot use.")
         .def("classify", &classify_py, py::arg("points"), py::arg("k") = py::none(),
              "Classifies one object's cloud ((N, 3) or (H, W, 3)) by the vote of its k nearest "
              "views (default: the Recognizer's k). Raises ValueError for a cloud without "

@@ -65,6 +65,7 @@ def test_missing_files_raise_file_not_found(tmp_path, cli):
                  lambda: esf.evaluate(tmp_path / "missing.sqlite", tmp_path / "t.csv")]:
         with pytest.raises(FileNotFoundError):
             call()
+    assert not (tmp_path / "db.sqlite").exists()  # train() failed before creating it
 
 
 def test_broken_files_raise_os_error(tmp_path):
