@@ -104,7 +104,7 @@ py::array_t<float> descriptor_array(const EsfDescriptor& d) {
     return py::array_t<float>(static_cast<py::ssize_t>(d.size()), d.data());
 }
 
-py::array_t<float> describe(py::handle points, int samples, std::uint64_t seed,
+py::array_t<float> describe(const py::object& points, int samples, std::uint64_t seed,
                             const std::string& sampler, int grid) {
     const PointsArg arg = points_arg(points);
     const EsfOptions options = esf_options(samples, seed, sampler, grid);
@@ -161,7 +161,7 @@ py::array_t<float> read_cloud_py(const fs::path& path, bool organized) {
     return points_array(drop_non_finite(cloud.points).points);
 }
 
-void write_cloud_py(const fs::path& path, py::handle points, const std::string& encoding) {
+void write_cloud_py(const fs::path& path, const py::object& points, const std::string& encoding) {
     if (cloud_format_from_path(path.string()) != CloudFormat::kPcd)
         throw std::invalid_argument(path.string() + ": write_cloud writes PCD files (.pcd)");
     PcdEncoding e = PcdEncoding::kBinary;
@@ -223,7 +223,7 @@ struct SegmentArgs {
     py::arg("cluster_tolerance") = 0.02f, py::arg("min_cluster_points") = 100, \
     py::arg("viewpoint") = py::none(), py::arg("seed") = 0, py::arg("threads") = 0
 
-SegmentationResult segment_py(py::handle points, const SegmentArgs& args) {
+SegmentationResult segment_py(const py::object& points, const SegmentArgs& args) {
     const PointsArg arg = points_arg(points);
     const SegmentationOptions options = args.options();
     py::gil_scoped_release release;
@@ -232,7 +232,7 @@ SegmentationResult segment_py(py::handle points, const SegmentArgs& args) {
 
 // ---- recognition ----------------------------------------------------------------------------
 
-Classification classify_py(const Recognizer& recognizer, py::handle points,
+Classification classify_py(const Recognizer& recognizer, const py::object& points,
                            std::optional<std::size_t> k) {
     const PointsArg arg = points_arg(points);
     if (k && *k == 0) throw std::invalid_argument("k must be >= 1");
@@ -251,7 +251,7 @@ Classification classify_py(const Recognizer& recognizer, py::handle points,
     return classify_neighbours(found.neighbours, classifier.labels());
 }
 
-std::vector<RecognizedObject> scene_py(const Recognizer& recognizer, py::handle points,
+std::vector<RecognizedObject> scene_py(const Recognizer& recognizer, const py::object& points,
                                        const SegmentArgs& args) {
     const PointsArg arg = points_arg(points);
     const SegmentationOptions options = args.options();
@@ -443,7 +443,8 @@ PYBIND11_MODULE(_esf, m) {
     py::register_exception_translator(&translate_exception);
 
     m.def(
-        "as_points", [](py::handle points) { return points_arg(points).array; }, py::arg("points"),
+        "as_points", [](const py::object& points) { return points_arg(points).array; },
+        py::arg("points"),
         "The float32 array esf computes on for ``points``: ``points`` itself when it is a "
         "C-contiguous float32 (N, 3) or (H, W, 3) array (no copy), otherwise one converted "
         "copy. Accepts any array-like of numbers and objects with a ``points`` attribute (an "
@@ -520,9 +521,10 @@ PYBIND11_MODULE(_esf, m) {
 
     m.def(
         "segment",
-        [](py::handle points, const std::string& grouping, float plane_distance, float min_height,
-           float max_height, float cluster_tolerance, std::size_t min_cluster_points,
-           std::optional<std::vector<float>> viewpoint, std::uint64_t seed, int threads) {
+        [](const py::object& points, const std::string& grouping, float plane_distance,
+           float min_height, float max_height, float cluster_tolerance,
+           std::size_t min_cluster_points, std::optional<std::vector<float>> viewpoint,
+           std::uint64_t seed, int threads) {
             return segment_py(points,
                               {grouping, plane_distance, min_height, max_height, cluster_tolerance,
                                min_cluster_points, std::move(viewpoint), seed, threads});
@@ -624,7 +626,7 @@ PYBIND11_MODULE(_esf, m) {
              "descriptor.")
         .def(
             "describe",
-            [](const Recognizer& r, py::handle points) {
+            [](const Recognizer& r, const py::object& points) {
                 const PointsArg arg = points_arg(points);
                 QueryDescriptor d;
                 {
@@ -641,7 +643,7 @@ PYBIND11_MODULE(_esf, m) {
             "one row per signature.")
         .def(
             "scene",
-            [](const Recognizer& r, py::handle points, const std::string& grouping,
+            [](const Recognizer& r, const py::object& points, const std::string& grouping,
                float plane_distance, float min_height, float max_height, float cluster_tolerance,
                std::size_t min_cluster_points, std::optional<std::vector<float>> viewpoint,
                std::uint64_t seed, int threads) {
