@@ -5,8 +5,10 @@ JOBS ?= $(shell nproc)
 DEMO_ARGS ?=
 WERROR ?= ON
 CMAKE_FLAGS ?=
+# The Python the esf module is built for and installed into (e.g. a venv's bin/python3).
+PYTHON ?=
 
-.PHONY: all deps configure build demo test bench format format-check clean
+.PHONY: all deps configure build demo test bench python install-python format format-check clean
 
 all: build
 
@@ -14,7 +16,7 @@ deps:
 	@scripts/install-deps.sh
 
 configure: deps
-	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DESF_WERROR=$(WERROR) $(CMAKE_FLAGS) > $(BUILD).configure.log || (cat $(BUILD).configure.log; exit 1)
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DESF_WERROR=$(WERROR) $(if $(PYTHON),-DPython3_EXECUTABLE=$(abspath $(PYTHON))) $(CMAKE_FLAGS) > $(BUILD).configure.log || (cat $(BUILD).configure.log; exit 1)
 
 build: configure
 	@cmake --build $(BUILD) -j $(JOBS)
@@ -25,6 +27,14 @@ demo: configure
 
 test: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# The Python module, importable with PYTHONPATH=$(BUILD)/python.
+python: configure
+	@cmake --build $(BUILD) -j $(JOBS) --target esf_python
+
+# Installs the esf package into PYTHON's site-packages (make install-python PYTHON=venv/bin/python3).
+install-python: python
+	@cmake --install $(BUILD) --component python
 
 bench: build
 	@$(BUILD)/bench/esf_bench_descriptor ../shared/data/real/pcl/milk_test.pcd ../shared/data/real/objects/*.pcd
