@@ -1,4 +1,6 @@
-// The PCL baselines of the evaluation, behind the GlobalDescriptor interface.
+// The PCL baselines of the evaluation, behind the GlobalDescriptor interface: the module
+// libesf_baselines.so, which make_descriptor() opens at run time (baseline_module.cpp), so that
+// nothing else links PCL.
 //
 // pcl-esf runs pcl::ESFEstimation on the finite input points as they are. The others share the
 // preprocessing of PCL's global recognition pipeline (pcl::rec_3d_framework, PreProcessorAnd-
@@ -482,62 +484,24 @@ class Shot final : public PclBaseline {
     }
 };
 
-}  // namespace
-
-std::unique_ptr<GlobalDescriptor> make_pcl_descriptor(const std::string& name,
-                                                      const DescriptorOptions& options) {
-    if (name == "pcl-esf")
-        return std::make_unique<PclEsf>(
-            with_esf_blocks(DescriptorInfo{
-                name,
-                kEsfSize,
-                false,
-                false,
-                "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)",
-                {},
-                {}}),
-            options);
-    if (name == "vfh")
-        return std::make_unique<Vfh>(
-            DescriptorInfo{name, 308, false, true, "PCL VFH (Rusu et al. 2010)", {}, {}}, options);
-    if (name == "cvfh")
-        return std::make_unique<Cvfh>(
-            DescriptorInfo{name,
-                           308,
-                           true,
-                           true,
-                           "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)",
-                           {},
-                           {}},
-            options);
-    if (name == "our-cvfh")
-        return std::make_unique<OurCvfh>(
-            DescriptorInfo{name,
-                           308,
-                           true,
-                           true,
-                           "PCL OUR-CVFH, one signature per region and reference frame "
-                           "(Aldoma et al. 2012)",
-                           {},
-                           {}},
-            options);
-    if (name == "gasd")
-        return std::make_unique<Gasd>(
-            DescriptorInfo{
-                name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", {}, {}},
-            options);
-    if (name == "shot")
-        return std::make_unique<Shot>(
-            DescriptorInfo{name,
-                           352,
-                           false,
-                           true,
-                           "PCL SHOT at the centroid, radius covering the object "
-                           "(Tombari et al. 2010)",
-                           {},
-                           {}},
-            options);
+std::unique_ptr<GlobalDescriptor> make_baseline(const DescriptorInfo& info,
+                                                const DescriptorOptions& options) {
+    const std::string& name = info.name;
+    if (name == "pcl-esf") return std::make_unique<PclEsf>(info, options);
+    if (name == "vfh") return std::make_unique<Vfh>(info, options);
+    if (name == "cvfh") return std::make_unique<Cvfh>(info, options);
+    if (name == "our-cvfh") return std::make_unique<OurCvfh>(info, options);
+    if (name == "gasd") return std::make_unique<Gasd>(info, options);
+    if (name == "shot") return std::make_unique<Shot>(info, options);
     return nullptr;
 }
 
+constexpr BaselineModule kModule = {kBaselineModuleAbi, &make_baseline};
+
+}  // namespace
+
 }  // namespace esf::detail
+
+extern "C" ESF_BASELINES_EXPORT const esf::detail::BaselineModule* esf_baseline_module() {
+    return &esf::detail::kModule;
+}

@@ -1,6 +1,6 @@
 #pragma once
-// Internal to the descriptors module: the PCL baselines behind make_descriptor() and the checks
-// every descriptor shares. No PCL types here.
+// Internal to the descriptors module: the PCL baselines module behind make_descriptor() and the
+// checks every descriptor shares. No PCL types here.
 
 #include <memory>
 #include <span>
@@ -8,6 +8,8 @@
 
 #include "esf/descriptor.hpp"
 #include "esf/point_cloud.hpp"
+
+#define ESF_BASELINES_EXPORT __attribute__((visibility("default")))
 
 namespace esf::detail {
 
@@ -23,9 +25,24 @@ bool normalise_signature(Signature& signature);
 DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_sizes = {},
                                std::span<const char* const> extra_names = {});
 
-/// The PCL baseline `name` (pcl-esf, vfh, cvfh, our-cvfh, gasd, shot), or nullptr when `name`
-/// is not one of them. Options are validated by the caller.
-std::unique_ptr<GlobalDescriptor> make_pcl_descriptor(const std::string& name,
-                                                      const DescriptorOptions& options);
+/// The baselines module (libesf_baselines.so, PCL inside): what it exports under the C name
+/// esf_baseline_module. Built from the same sources as the library that loads it; `abi` guards
+/// against a module of another build.
+inline constexpr int kBaselineModuleAbi = 1;
+struct BaselineModule {
+    int abi = 0;
+    /// The baseline `info.name` (pcl-esf, vfh, cvfh, our-cvfh, gasd, shot) with `info` as its
+    /// info, or nullptr for another name. Options are validated by the caller.
+    std::unique_ptr<GlobalDescriptor> (*make)(const DescriptorInfo& info,
+                                              const DescriptorOptions& options) = nullptr;
+};
 
+/// The loaded baselines module. Loaded once per process on first use (the dynamic loader's
+/// state is process-wide anyway) from, in order: $ESF_BASELINES (a file), lib/esf/ beside the
+/// binary's directory (an installed tree), the build tree's lib/ and the installed libdir.
+/// Throws std::invalid_argument naming `name` and how to get the module when none loads.
+const BaselineModule& baseline_module(const std::string& name);
+
+/// Whether the baselines module can be loaded (false when this build has none).
+bool baseline_module_available();
 }  // namespace esf::detail

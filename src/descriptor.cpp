@@ -258,26 +258,83 @@ void validate(const DescriptorOptions& options) {
             std::to_string(options.normal_radius_factor));
 }
 
+void check_name(const std::string& name) {
+    if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) {
+        std::string valid;
+        for (const char* n : kNames) valid += (valid.empty() ? "" : ", ") + std::string(n);
+        throw std::invalid_argument("unknown descriptor '" + name + "' (valid: " + valid + ")");
+    }
+}
+
+/// The PCL baselines, computed by the baselines module (baseline_descriptors.cpp).
+bool is_baseline(const std::string& name) {
+    return name == "pcl-esf" || name == "vfh" || name == "cvfh" || name == "our-cvfh" ||
+           name == "gasd" || name == "shot";
+}
+
+/// What each baseline computes: known without loading the module.
+DescriptorInfo baseline_info(const std::string& name) {
+    if (name == "pcl-esf")
+        return with_esf_blocks(
+            {name,
+             kEsfSize,
+             false,
+             false,
+             "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)",
+             {},
+             {}});
+    if (name == "vfh") return {name, 308, false, true, "PCL VFH (Rusu et al. 2010)", {}, {}};
+    if (name == "cvfh")
+        return {
+            name, 308, true, true, "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)",
+            {},   {}};
+    if (name == "our-cvfh")
+        return {name,
+                308,
+                true,
+                true,
+                "PCL OUR-CVFH, one signature per region and reference frame (Aldoma et al. "
+                "2012)",
+                {},
+                {}};
+    if (name == "gasd")
+        return {name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", {}, {}};
+    return {name,
+            352,
+            false,
+            true,
+            "PCL SHOT at the centroid, radius covering the object (Tombari et al. 2010)",
+            {},
+            {}};
+}
+
 }  // namespace
 
 std::vector<std::string> descriptor_names() { return {kNames.begin(), kNames.end()}; }
 
 std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
                                                   const DescriptorOptions& options) {
-    if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) {
-        std::string valid;
-        for (const char* n : kNames) valid += (valid.empty() ? "" : ", ") + std::string(n);
-        throw std::invalid_argument("unknown descriptor '" + name + "' (valid: " + valid + ")");
-    }
+    check_name(name);
     validate(options);
     if (name == "esf") return std::make_unique<EsfGlobal>(options);
     if (name == "esf-angles") return std::make_unique<EsfAnglesGlobal>(options);
     if (name == "sdvs") return std::make_unique<D2Global>(options, true);
     if (name == "d2") return std::make_unique<D2Global>(options, false);
-    return detail::make_pcl_descriptor(name, options);
+    std::unique_ptr<GlobalDescriptor> baseline =
+        detail::baseline_module(name).make(baseline_info(name), options);
+    if (!baseline) throw std::invalid_argument(name + ": the baselines module does not know it");
+    return baseline;
 }
 
-DescriptorInfo descriptor_info(const std::string& name) { return make_descriptor(name)->info(); }
+bool descriptor_available(const std::string& name) {
+    check_name(name);
+    return !is_baseline(name) || detail::baseline_module_available();
+}
+
+DescriptorInfo descriptor_info(const std::string& name) {
+    check_name(name);
+    return is_baseline(name) ? baseline_info(name) : make_descriptor(name)->info();
+}
 
 std::vector<std::size_t> descriptor_blocks(const DescriptorInfo& info) {
     if (info.blocks.empty()) return {static_cast<std::size_t>(info.dimension)};

@@ -134,11 +134,17 @@ class GlobalDescriptor {
 };
 
 /// Creates the descriptor `name` (one of descriptor_names()). Throws std::invalid_argument for
-/// an unknown name (the message lists the valid ones) or options out of range.
+/// an unknown name (the message lists the valid ones), options out of range, or a PCL baseline
+/// when the baselines module cannot be loaded (the message says how to get it).
 std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
                                                   const DescriptorOptions& options = {});
 
 /// The registered names, in the order of the table above.
 std::vector<std::string> descriptor_names();
+
+/// Whether make_descriptor(name) can work in this build: always for esf, esf-angles, sdvs and
+/// d2; for the PCL baselines only when the baselines module (libesf_baselines.so, built with
+/// -DESF_WITH_PCL=ON) can be loaded. Throws std::invalid_argument for an unknown name.
+bool descriptor_available(const std::string& name);
 
 }  // namespace esf
