@@ -110,7 +110,14 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
             if (static_cast<std::size_t>(out_end - op) < len) {
                 return corrupt("output exceeds stated size");
             }
-            std::memcpy(op, ip, len);
+            // With room on both sides, one fixed 32-byte copy (a few vector moves) serves any
+            // run; the bytes past the run are overwritten by the next token.
+            if (static_cast<std::size_t>(in_end - ip) >= kMaxLiteral &&
+                static_cast<std::size_t>(out_end - op) >= kMaxLiteral) {
+                std::memcpy(op, ip, kMaxLiteral);
+            } else {
+                std::memcpy(op, ip, len);
+            }
             op += len;
             ip += len;
             continue;
@@ -130,12 +137,23 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
             return corrupt("output exceeds stated size");
         }
         const unsigned char* ref = op - distance;
-        if (distance >= len) {
+        if (distance >= 16 && static_cast<std::size_t>(out_end - op) >= len + 16) {
+            // 16 bytes at a time: each block's source ends at or before its destination.
+            for (std::size_t k = 0; k < len; k += 16) std::memcpy(op + k, ref + k, 16);
+        } else if (distance >= len) {
             std::memcpy(op, ref, len);
-            op += len;
         } else {
-            for (std::size_t k = 0; k < len; ++k) *op++ = *ref++;
+            // Overlapping: the output repeats the last `distance` bytes. Copy one period, then
+            // double what is done (from the start of the match, so every copy is disjoint and
+            // starts at a whole period): log2(len / distance) copies instead of len.
+            std::memcpy(op, ref, distance);
+            for (std::size_t done = distance; done < len;) {
+                const std::size_t chunk = std::min(done, len - done);
+                std::memcpy(op + done, op, chunk);
+                done += chunk;
+            }
         }
+        op += len;
     }
     result.produced = static_cast<std::size_t>(op - out.data());
     return result;
