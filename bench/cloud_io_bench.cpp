@@ -123,8 +123,8 @@ void BM_LzfCompressColumns(benchmark::State& state) {
         benchmark::DoNotOptimize(size);
     }
     state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(raw.size()));
-    state.SetLabel("ratio " + std::to_string(static_cast<double>(raw.size()) /
-                                             static_cast<double>(size)));
+    state.SetLabel("ratio " +
+                   std::to_string(static_cast<double>(raw.size()) / static_cast<double>(size)));
 }
 BENCHMARK(BM_LzfCompressColumns)->Unit(benchmark::kMillisecond);
 

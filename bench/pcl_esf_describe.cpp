@@ -1,6 +1,7 @@
-// pcl_esf_describe FILE: PCL's own pipeline for one cloud, as a whole process: pcl::io::loadPCDFile,
-// non-finite points dropped, pcl::ESFEstimation, one CSV line "FILE,v0,...,v639" on stdout.
-// The counterpart of `esf describe --threads 1 FILE` in bench/cloud_io_batch.sh.
+// pcl_esf_describe FILE: PCL's own pipeline for one cloud, as a whole process:
+// pcl::io::loadPCDFile, non-finite points dropped, pcl::ESFEstimation, one CSV line
+// "FILE,v0,...,v639" on stdout. The counterpart of `esf describe --threads 1 FILE` in
+// bench/cloud_io_batch.sh.
 
 #include <pcl/features/esf.h>
 #include <pcl/io/pcd_io.h>

@@ -73,7 +73,7 @@ std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
         out += "DATA binary\n";
         std::size_t pos = out.size();
         out.resize(pos + n * point_step);
-        if (!with_labels && kLittleEndianHost) {
+        if (!with_labels && kLittleEndianHost && n > 0) {
             std::memcpy(out.data() + pos, cloud.points.data(), n * point_step);
             return out;
         }

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <pcl/io/lzf.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <random>
@@ -125,6 +126,30 @@ TEST(Lzf, CorruptInputIsReportedNotOverrun) {
     // A long back reference cut off after its length byte.
     r = lzf_decompress(Bytes{0x00, 'a', 0xe0, 0x01}, out);
     EXPECT_STREQ(r.error, "back reference cut off");
+}
+
+TEST(Lzf, PrefixesAndGarbageStayInBounds) {
+    // Every prefix of a valid block decodes to a prefix of the input or reports an error.
+    const Bytes raw = inputs().back().second;
+    const Bytes packed = compress(raw);
+    Bytes out(raw.size());
+    for (std::size_t n = 0; n <= packed.size(); n += 7) {
+        const auto r = lzf_decompress({packed.data(), n}, out);
+        ASSERT_LE(r.produced, raw.size());
+        if (!r.error) {
+            ASSERT_TRUE(
+                std::equal(out.begin(), out.begin() + static_cast<long>(r.produced), raw.begin()));
+        }
+    }
+    // Random bytes into random room: never more than the room (sanitizer builds check the rest).
+    std::mt19937 gen(9);
+    for (int trial = 0; trial < 3000; ++trial) {
+        const Bytes garbage = random_bytes(gen() % 200, static_cast<std::uint32_t>(trial));
+        Bytes room(gen() % 300);
+        const auto r = lzf_decompress(garbage, room);
+        ASSERT_LE(r.produced, room.size());
+        ASSERT_LE(r.at, garbage.size());
+    }
 }
 
 TEST(LzfAgainstPcl, PclDecodesWhatWeEncode) {
