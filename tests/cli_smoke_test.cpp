@@ -89,6 +89,27 @@ TEST_F(CliSmokeTest, DescribeWritesOneCsvLinePerFile) {
     EXPECT_EQ(commas, static_cast<std::size_t>(esf::kEsfSize));
 }
 
+TEST_F(CliSmokeTest, DescribeCsvValuesAreTheLibrarysBitForBit) {
+    // Shortest round-trip text (std::to_chars): every value reads back as the same float.
+    const std::string box = write_box("box.pcd");
+    const CliRun run = esf("describe --samples 2000 --threads 1 " + quoted(box));
+    ASSERT_EQ(run.code, 0) << run.err;
+    esf::EsfOptions options;
+    options.samples = 2000;
+    const esf::EsfResult expected = esf::compute_esf(esf::read_cloud(box).points, options);
+    std::vector<float> values;
+    std::size_t pos = run.out.find(',');
+    while (pos != std::string::npos) {
+        const std::size_t end = run.out.find_first_of(",\n", pos + 1);
+        values.push_back(std::stof(run.out.substr(pos + 1, end - pos - 1)));
+        pos = run.out[end] == ',' ? end : std::string::npos;
+    }
+    ASSERT_EQ(values.size(), expected.descriptor.size());
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        ASSERT_EQ(values[i], expected.descriptor[i]) << "bin " << i;
+    }
+}
+
 TEST_F(CliSmokeTest, DescribeGoesOnPastAMissingFile) {
     const std::string box = write_box("box.pcd");
     const std::string missing = (dir_ / "missing.pcd").string();

@@ -1,13 +1,13 @@
 // esf describe FILE... : ESF descriptors of point-cloud files, as CSV or JSON.
 
+#include <array>
 #include <atomic>
+#include <charconv>
 #include <cstdio>
 #include <fstream>
-#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -32,11 +32,11 @@ struct DescribeArgs {
     std::string output;
 };
 
-/// Shortest decimal that reads back as the same float (9 significant digits suffice).
-std::string float_text(float value) {
-    std::ostringstream out;
-    out << std::setprecision(9) << value;
-    return out.str();
+/// Appends the shortest decimal that reads back as the same float (std::to_chars).
+void append_float(std::string& out, float value) {
+    std::array<char, 32> buf{};
+    const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), value);
+    out.append(buf.data(), result.ptr);
 }
 
 void run_describe(const DescribeArgs& args) {
@@ -96,9 +96,13 @@ void run_describe(const DescribeArgs& args) {
             entry["descriptor"] = std::vector<float>(d.begin(), d.end());
             json.push_back(std::move(entry));
         } else {
-            out << args.files[i];
-            for (float v : d) out << ',' << float_text(v);
-            out << '\n';
+            std::string line = args.files[i];
+            for (float v : d) {
+                line += ',';
+                append_float(line, v);
+            }
+            line += '\n';
+            out << line;
         }
     }
     if (args.format == "json") out << json.dump(1) << '\n';

@@ -2,9 +2,11 @@
 // main() wires the subcommands together and turns exceptions into one line on stderr.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <stdexcept>
+#include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -32,8 +34,17 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        const int code = app.exit(e);  // prints help, version or the usage error
-        return code == 0 ? 0 : esf::cli::kExitUsage;
+        if (e.get_exit_code() == 0) return app.exit(e);  // --help and --version, on stdout
+        // A usage error is one line like every other error: CLI11's message on one line,
+        // without its "Run with --help" footer.
+        std::string message = e.what();
+        if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-') {
+            message = std::string("unknown command '") + argv[1] + "' (see esf --help)";
+        }
+        std::replace(message.begin(), message.end(), '\n', ' ');
+        while (!message.empty() && message.back() == ' ') message.pop_back();
+        std::fprintf(stderr, "esf: error: %s\n", message.c_str());
+        return esf::cli::kExitUsage;
     } catch (const esf::cli::ExitStatus& status) {
         return status.code;
     } catch (const std::invalid_argument& e) {

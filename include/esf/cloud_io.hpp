@@ -2,13 +2,20 @@
 // Reading and writing point clouds: PCD (ascii, binary, binary_compressed; any field layout),
 // PLY point clouds (ascii, binary little and big endian) and plain "x y z" text.
 //
-// Readers take a path or any std::istream (so tests run in memory); every failure throws
-// esf::IoError with a message naming the file (and line or element where known). Only x, y, z
-// (and an optional integer `label` field) are read; the organised layout width x height is kept.
-// Non-finite points are kept as they are: drop them with drop_non_finite() before describing.
+// Readers take a path, any std::istream or the bytes of a whole file (so tests run in memory);
+// every failure throws esf::IoError with a message naming the file (and line or element where
+// known). Only x, y, z (and an optional integer `label` field) are read; the organised layout
+// width x height is kept. Non-finite points are kept as they are: drop them with
+// drop_non_finite() before describing.
+//
+// Paths must name regular files: a directory, FIFO, socket or device is refused before anything
+// is read (never blocks). Point counts in headers are checked against the bytes present before
+// anything is allocated. Text numbers must fit a float: "1e39" is an error naming the line and
+// the value, "1e-50" reads as 0 (values below the float range round to 0 or a subnormal).
 
 #include <iosfwd>
 #include <string>
+#include <string_view>
 
 #include "esf/point_cloud.hpp"
 
@@ -24,13 +31,17 @@ PointCloud read_cloud(const std::string& path);
 
 PointCloud read_pcd(const std::string& path);
 PointCloud read_pcd(std::istream& in, const std::string& name);
+/// Reads a PCD file already in memory; `name` is used in messages only.
+PointCloud parse_pcd(std::string_view bytes, const std::string& name);
 
 PointCloud read_ply_cloud(const std::string& path);
 PointCloud read_ply_cloud(std::istream& in, const std::string& name);
+PointCloud parse_ply_cloud(std::string_view bytes, const std::string& name);
 
 /// Whitespace- or comma-separated "x y z [more columns]" per line; '#' starts a comment.
 PointCloud read_xyz(const std::string& path);
 PointCloud read_xyz(std::istream& in, const std::string& name);
+PointCloud parse_xyz(std::string_view bytes, const std::string& name);
 
 enum class PcdEncoding { kAscii, kBinary, kBinaryCompressed };
 
@@ -40,5 +51,10 @@ void write_pcd(const std::string& path, const PointCloud& cloud,
                PcdEncoding encoding = PcdEncoding::kBinary);
 void write_pcd(std::ostream& out, const PointCloud& cloud,
                PcdEncoding encoding = PcdEncoding::kBinary);
+
+/// Writes one "x y z" line per point (shortest text that reads back as the same float; NaN as
+/// "nan"), atomically like write_pcd. Labels and the organised layout are not kept.
+void write_xyz(const std::string& path, const PointCloud& cloud);
+void write_xyz(std::ostream& out, const PointCloud& cloud);
 
 }  // namespace esf

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Whole-process batch throughput on the shared real clouds, side by side: one `esf describe
+# --threads 1 FILE` process per file against one `pcl_esf_describe FILE` process per file (PCL's
+# loadPCDFile + ESFEstimation). Each process reads its file, describes it and prints one CSV
+# line, so start-up, reading and describing all count. Ends with "ratio: X" = PCL time / esf time.
+#
+# usage: bench/cloud_io_batch.sh [BUILD_DIR] [MAX_FILES]   (defaults: build, 200)
+# The clouds are $ESF_DATA/real/**/*.pcd (ESF_DATA defaults to ../shared/data beside the repository).
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${1:-$root/build}"
+max_files="${2:-200}"
+data="${ESF_DATA:-$root/../shared/data}"
+esf="$build/apps/esf/esf"
+pcl="$build/bench/pcl_esf_describe"
+for tool in "$esf" "$pcl"; do
+    [[ -x "$tool" ]] || { echo "cloud_io_batch: missing $tool (cmake --build $build)" >&2; exit 1; }
+done
+[[ -d "$data/real" ]] || { echo "cloud_io_batch: no $data/real (set ESF_DATA)" >&2; exit 1; }
+
+mapfile -t files < <(find "$data/real" -name '*.pcd' -type f | sort | head -n "$max_files")
+[[ ${#files[@]} -gt 0 ]] || { echo "cloud_io_batch: no .pcd files under $data/real" >&2; exit 1; }
+
+# Warm the page cache so that both sides read from memory.
+cat "${files[@]}" > /dev/null
+
+# One process per file, ours and PCL's alternating (and swapping which goes first) so that both
+# meet the same machine load; $EPOCHREALTIME (bash 5) costs no process of its own.
+now_us() { local t=$EPOCHREALTIME; echo $((10#${t/./})); }
+esf_us=0
+pcl_us=0
+for i in "${!files[@]}"; do
+    f="${files[$i]}"
+    for side in $((i % 2)) $((1 - i % 2)); do
+        t0=$(now_us)
+        if [[ $side == 0 ]]; then
+            "$esf" describe --threads 1 "$f" > /dev/null
+            esf_us=$((esf_us + $(now_us) - t0))
+        else
+            "$pcl" "$f" > /dev/null
+            pcl_us=$((pcl_us + $(now_us) - t0))
+        fi
+    done
+done
+# The same files in one esf process: what is left without a process start per file.
+t0=$(now_us)
+"$esf" describe --threads 1 "${files[@]}" > /dev/null
+one_us=$(($(now_us) - t0))
+
+n=${#files[@]}
+printf 'files: %d (%s)\n' "$n" "$data/real"
+awk -v n="$n" -v e="$esf_us" -v p="$pcl_us" -v o="$one_us" 'BEGIN {
+    e /= 1e6; p /= 1e6; o /= 1e6
+    printf "esf describe --threads 1 FILE, one process per file: %.2f s, %.1f files/s\n", e, n / e
+    printf "pcl_esf_describe FILE, one process per file:         %.2f s, %.1f files/s\n", p, n / p
+    printf "esf describe --threads 1 FILE..., one process:       %.2f s, %.1f files/s\n", o, n / o
+    printf "ratio: %.2f\n", p / e
+}'

@@ -1,0 +1,257 @@
+#include "cloud_io_detail.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <filesystem>
+#include <istream>
+
+#include "esf/error.hpp"
+
+namespace esf::detail {
+
+void fail(const std::string& name, std::size_t line, const std::string& reason) {
+    throw IoError(file_message(name, line, reason));
+}
+
+std::string shown(std::string_view token) {
+    constexpr std::size_t kMaxShown = 40;
+    std::string out = "'";
+    for (std::size_t i = 0; i < token.size() && i < kMaxShown; ++i) {
+        const auto c = static_cast<unsigned char>(token[i]);
+        out += (c >= 32 && c < 127) ? static_cast<char>(c) : '?';
+    }
+    if (token.size() > kMaxShown) out += "...";
+    return out + "'";
+}
+
+std::string errno_text(int error) {
+    return std::error_code(error, std::generic_category()).message();
+}
+
+std::uint64_t checked_mul(std::uint64_t a, std::uint64_t b, const std::string& name) {
+    std::uint64_t product = 0;
+    if (__builtin_mul_overflow(a, b, &product)) fail(name, 0, "absurd size: data size overflows");
+    return product;
+}
+
+std::uint64_t checked_add(std::uint64_t a, std::uint64_t b, const std::string& name) {
+    std::uint64_t sum = 0;
+    if (__builtin_add_overflow(a, b, &sum)) fail(name, 0, "absurd size: data size overflows");
+    return sum;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Whole files
+
+namespace {
+
+/// "is a directory, not a file", "is a FIFO, not a regular file", ...; empty for regular files.
+std::string not_regular(mode_t mode) {
+    if (S_ISREG(mode)) return {};
+    if (S_ISDIR(mode)) return "is a directory, not a file";
+    const char* kind = S_ISFIFO(mode)   ? "a FIFO"
+                       : S_ISCHR(mode)  ? "a character device"
+                       : S_ISBLK(mode)  ? "a block device"
+                       : S_ISSOCK(mode) ? "a socket"
+                                        : "not a regular file";
+    return std::string("is ") + kind + ", not a regular file";
+}
+
+class FdCloser {
+  public:
+    explicit FdCloser(int fd) : fd_(fd) {}
+    ~FdCloser() { ::close(fd_); }
+    FdCloser(const FdCloser&) = delete;
+    FdCloser& operator=(const FdCloser&) = delete;
+
+  private:
+    int fd_;
+};
+
+}  // namespace
+
+FileBytes read_regular_file(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+        const int error = errno;
+        if (error == ENOENT) fail(path, 0, "no such file");
+        fail(path, 0, "cannot open for reading: " + errno_text(error));
+    }
+    if (const std::string why = not_regular(st.st_mode); !why.empty()) fail(path, 0, why);
+    // Non-blocking, so that a FIFO swapped in after the stat cannot block the open either.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) fail(path, 0, "cannot open for reading: " + errno_text(errno));
+    const FdCloser closer(fd);
+    if (::fstat(fd, &st) != 0) fail(path, 0, "cannot read: " + errno_text(errno));
+    if (const std::string why = not_regular(st.st_mode); !why.empty()) fail(path, 0, why);
+
+    FileBytes bytes;
+    const auto size = static_cast<std::size_t>(st.st_size);
+    bytes.data = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(size, 1));
+    while (bytes.size < size) {
+        const ssize_t got = ::read(fd, bytes.data.get() + bytes.size, size - bytes.size);
+        if (got < 0) {
+            if (errno == EINTR) continue;
+            fail(path, 0, "read error: " + errno_text(errno));
+        }
+        if (got == 0) break;  // the file shrank while being read: keep what is there
+        bytes.size += static_cast<std::size_t>(got);
+    }
+    return bytes;
+}
+
+std::string read_all(std::istream& in, const std::string& name) {
+    std::string data;
+    const std::istream::pos_type start = in.tellg();
+    if (start != std::istream::pos_type(-1) && in.seekg(0, std::ios::end)) {
+        const std::istream::pos_type end = in.tellg();
+        in.seekg(start);
+        if (end != std::istream::pos_type(-1) && end >= start && in) {
+            data.resize(static_cast<std::size_t>(end - start));
+            in.read(data.data(), static_cast<std::streamsize>(data.size()));
+            data.resize(static_cast<std::size_t>(in.gcount()));
+            if (in.bad()) fail(name, 0, "read error");
+            return data;
+        }
+    }
+    in.clear();
+    if (start != std::istream::pos_type(-1)) in.seekg(start);
+    std::array<char, 1 << 16> chunk{};
+    while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
+        data.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    }
+    if (in.bad()) fail(name, 0, "read error");
+    return data;
+}
+
+void write_file_replacing(const std::string& path, std::string_view bytes) {
+    // A fresh temporary beside the target (O_EXCL: concurrent writers never share one), then an
+    // atomic rename over the target.
+    std::string tmp;
+    int fd = -1;
+    int error = 0;
+    for (int attempt = 0; attempt < 1000 && fd < 0; ++attempt) {
+        tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(attempt);
+        fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        error = errno;
+        if (fd < 0 && error != EEXIST) break;
+    }
+    if (fd < 0) fail(path, 0, "cannot create temporary file " + tmp + ": " + errno_text(error));
+    const char* p = bytes.data();
+    std::size_t left = bytes.size();
+    while (left > 0) {
+        const ssize_t written = ::write(fd, p, left);
+        if (written < 0) {
+            if (errno == EINTR) continue;
+            error = errno;
+            ::close(fd);
+            ::unlink(tmp.c_str());
+            fail(path, 0, "write failed: " + errno_text(error));
+        }
+        p += written;
+        left -= static_cast<std::size_t>(written);
+    }
+    if (::close(fd) != 0) {
+        error = errno;
+        ::unlink(tmp.c_str());
+        fail(path, 0, "write failed: " + errno_text(error));
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) {
+        ::unlink(tmp.c_str());
+        fail(path, 0, "cannot replace the file: " + ec.message());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lines, tokens, typed values
+
+void split(std::string_view line, std::string_view separators, std::vector<std::string_view>& out) {
+    out.clear();
+    std::size_t i = 0;
+    while ((i = line.find_first_not_of(separators, i)) != std::string_view::npos) {
+        std::size_t j = line.find_first_of(separators, i);
+        if (j == std::string_view::npos) j = line.size();
+        out.push_back(line.substr(i, j - i));
+        i = j;
+    }
+}
+
+std::size_t scalar_size(Scalar s) {
+    switch (s) {
+        case Scalar::kI8:
+        case Scalar::kU8:
+            return 1;
+        case Scalar::kI16:
+        case Scalar::kU16:
+            return 2;
+        case Scalar::kI32:
+        case Scalar::kU32:
+        case Scalar::kF32:
+            return 4;
+        default:
+            return 8;
+    }
+}
+
+namespace {
+
+static_assert(sizeof(Eigen::Vector3f) == 12, "points are packed x, y, z floats");
+
+template <bool kSwap>
+void read_axis(const char* src, std::size_t stride, Scalar type, Points& points, int axis) {
+    visit_scalar(type, [&](auto tag) {
+        using T = decltype(tag);
+        const std::size_t n = points.size();
+        for (std::size_t i = 0; i < n; ++i) {
+            points[i][axis] = static_cast<float>(load<T, kSwap>(src + i * stride));
+        }
+    });
+}
+
+}  // namespace
+
+void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
+    const std::size_t n = points.size();
+    if (n == 0) return;
+    const bool packed_floats = !swap && c.type[0] == Scalar::kF32 && c.type[1] == Scalar::kF32 &&
+                               c.type[2] == Scalar::kF32 && c.src[1] == c.src[0] + 4 &&
+                               c.src[2] == c.src[0] + 8 && c.stride[0] == c.stride[1] &&
+                               c.stride[0] == c.stride[2];
+    if (packed_floats) {
+        const std::size_t stride = c.stride[0];
+        char* out = reinterpret_cast<char*>(points.data());
+        if (stride == 12) {
+            std::memcpy(out, c.src[0], 12 * n);
+        } else {
+            for (std::size_t i = 0; i < n; ++i)
+                std::memcpy(out + 12 * i, c.src[0] + i * stride, 12);
+        }
+        return;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+        const auto a = static_cast<std::size_t>(axis);
+        if (swap) {
+            read_axis<true>(c.src[a], c.stride[a], c.type[a], points, axis);
+        } else {
+            read_axis<false>(c.src[a], c.stride[a], c.type[a], points, axis);
+        }
+    }
+}
+
+std::size_t read_label_column(const char* src, std::size_t stride, Scalar type, bool swap,
+                              std::vector<std::uint32_t>& labels) {
+    return visit_scalar(type, [&](auto tag) -> std::size_t {
+        using T = decltype(tag);
+        for (std::size_t i = 0; i < labels.size(); ++i) {
+            if (!to_label(load<T>(src + i * stride, swap), labels[i])) return i;
+        }
+        return labels.size();
+    });
+}
+
+}  // namespace esf::detail

@@ -1,0 +1,37 @@
+#pragma once
+// LZF, the compression of PCD's binary_compressed data: liblzf's format (as in pcl/io/lzf.h),
+// written here so that the core needs no PCL.
+//
+// A block is a sequence of tokens. A control byte c < 32 starts a literal run of c + 1 bytes;
+// otherwise len = c >> 5 (7: plus the next byte) and the back reference copies len + 2 bytes from
+// distance ((c & 31) << 8) + next byte + 1 behind the output. Matches are at least 3 bytes,
+// at most 264, at most 8192 bytes back.
+
+#include <cstddef>
+#include <span>
+
+namespace esf::detail {
+
+/// Most bytes lzf_compress() writes for `size` input bytes: literal runs of 32 cost one control
+/// byte each and a back reference never takes more bytes than it replaces.
+constexpr std::size_t lzf_compress_bound(std::size_t size) { return size + size / 32 + 1; }
+
+/// Compresses `in` into `out`, which must hold lzf_compress_bound(in.size()) bytes; returns the
+/// bytes written (0 for empty input). Inputs of 4 GiB and more are refused with
+/// std::invalid_argument. Deterministic: the same input always gives the same bytes.
+std::size_t lzf_compress(std::span<const unsigned char> in, std::span<unsigned char> out);
+
+/// Longest output of one LZF token per input byte: a 3-byte back reference yields 264 bytes.
+inline constexpr std::size_t kLzfMaxRatio = 88;
+
+struct LzfDecoded {
+    std::size_t produced = 0;     ///< bytes written to the output
+    const char* error = nullptr;  ///< why the input is corrupt; null when it decoded cleanly
+    std::size_t at = 0;           ///< input byte where the error was found
+};
+
+/// Decodes `in` into `out`. Bounds are checked on every token, so corrupt input reports an error
+/// instead of reading or writing out of range.
+LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out);
+
+}  // namespace esf::detail
