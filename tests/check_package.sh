@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs a built esf into a temporary prefix and builds and runs tests/package_consumer
+# against it with find_package(esf 0.1); also checks that the version file refuses esf 9.
+#   tests/check_package.sh BUILD_DIR
+set -euo pipefail
+build=$(cd "$1" && pwd)
+source_dir=$(cd "$(dirname "$0")/.." && pwd)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cmake --install "$build" --prefix "$work/prefix" > "$work/install.log"
+test -x "$work/prefix/bin/esf" || { echo "check_package: esf not installed" >&2; exit 1; }
+test -f "$work/prefix/lib/cmake/esf/esfConfigVersion.cmake" ||
+    { echo "check_package: no esfConfigVersion.cmake" >&2; exit 1; }
+"$work/prefix/bin/esf" --version
+cmake -S "$source_dir/tests/package_consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_PREFIX_PATH="$work/prefix" > "$work/configure.log" ||
+    { cat "$work/configure.log" >&2; exit 1; }
+cmake --build "$work/consumer" > "$work/build.log" || { cat "$work/build.log" >&2; exit 1; }
+"$work/consumer/consumer" "$work"
+# A version the package is not: find_package must fail.
+mkdir -p "$work/too_new"
+sed 's/find_package(esf 0.1 REQUIRED)/find_package(esf 9.0 REQUIRED)/' \
+    "$source_dir/tests/package_consumer/CMakeLists.txt" > "$work/too_new/CMakeLists.txt"
+cp "$source_dir/tests/package_consumer/consumer.cpp" "$work/too_new/"
+if cmake -S "$work/too_new" -B "$work/too_new/build" -DCMAKE_PREFIX_PATH="$work/prefix" \
+        > "$work/too_new.log" 2>&1; then
+    echo "check_package: find_package(esf 9.0) succeeded against esf $(\
+"$work/prefix/bin/esf" --version)" >&2
+    exit 1
+fi
+echo "check_package: ok (find_package(esf 9.0) refused)"
