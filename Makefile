@@ -36,6 +36,13 @@ python: configure
 install-python: python
 	@cmake --install $(BUILD) --component python
 
+# Without PCL: the library, the CLI and the tests (the baselines say how to get them), and the
+# installed package used by a project outside esf (ctest package_consumer).
+test-nopcl: deps
+	@cmake -S . -B $(BUILD)-nopcl -DCMAKE_BUILD_TYPE=Release -DESF_WERROR=$(WERROR) -DESF_WITH_PCL=OFF -DESF_BUILD_BENCH=OFF -DESF_PYTHON=OFF > $(BUILD)-nopcl.configure.log || (cat $(BUILD)-nopcl.configure.log; exit 1)
+	@cmake --build $(BUILD)-nopcl -j $(JOBS)
+	@cd $(BUILD)-nopcl && ctest --output-on-failure -j $(JOBS)
+
 bench: build
 	@$(BUILD)/bench/esf_bench_descriptor ../shared/data/real/pcl/milk_test.pcd ../shared/data/real/objects/*.pcd
 
