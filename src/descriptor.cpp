@@ -326,6 +326,16 @@ std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
     return baseline;
 }
 
+void check_descriptor_options(const std::string& name, const DescriptorOptions& options) {
+    check_name(name);
+    validate(options);
+}
+
+void require_descriptor(const std::string& name) {
+    check_name(name);
+    if (is_baseline(name)) detail::baseline_module(name);
+}
+
 bool descriptor_available(const std::string& name) {
     check_name(name);
     return !is_baseline(name) || detail::baseline_module_available();

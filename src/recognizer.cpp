@@ -202,8 +202,7 @@ QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind) {
                                     std::to_string(kind.version) +
                                     ", but this build computes version " + std::to_string(version) +
                                     ": retrain the database");
-    const int dimension =
-        kind.name == "esf" ? kEsfSize : make_descriptor(kind.name)->info().dimension;
+    const int dimension = descriptor_info(kind.name).dimension;
     if (kind.dimension != dimension)
         throw std::invalid_argument(
             "descriptor " + kind.name + " has " + std::to_string(kind.dimension) +
@@ -255,7 +254,7 @@ QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind) {
                                         std::to_string(remove) + " is not 0 or 1");
         o.remove_outliers = remove == 1;
         o.angles_weight = real_setting(settings, "descriptor_angles_weight", o.angles_weight);
-        make_descriptor(kind.name, o);  // throws for options out of range
+        check_descriptor_options(kind.name, o);  // throws for options out of range
     }
     return setup;
 }

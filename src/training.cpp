@@ -76,7 +76,7 @@ void validate(const TrainingOptions& options) {
     if (options.descriptor == "esf") {
         EsfEstimator check(options.esf);
     } else {
-        make_descriptor(options.descriptor, options.descriptor_options);
+        make_descriptor(options.descriptor, options.descriptor_options);  // a baseline: its module
     }
     // The renderer checks its options (level, camera, noise, fill, scale) when built: build one
     // for a tetrahedron so that bad options fail now, not as a failure of every model.
@@ -423,11 +423,11 @@ Settings training_settings(const TrainingOptions& options, bool rescale_non_metr
         };
     } else {
         const auto& d = options.descriptor_options;
-        const auto descriptor = make_descriptor(options.descriptor, d);
+        const DescriptorInfo info = descriptor_info(options.descriptor);
         settings = {
             {"descriptor", options.descriptor},
             {"descriptor_version", std::int64_t{stored_descriptor_version(options.descriptor)}},
-            {"descriptor_dimension", std::int64_t{descriptor->info().dimension}},
+            {"descriptor_dimension", std::int64_t{info.dimension}},
             {"descriptor_samples", std::int64_t{d.samples}},
             {"descriptor_leaf_factor", static_cast<double>(d.leaf_factor)},
             {"descriptor_normal_radius_factor", static_cast<double>(d.normal_radius_factor)},

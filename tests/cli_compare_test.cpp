@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,7 @@
 
 #include "cli_run.hpp"
 #include "error_of.hpp"
+#include "require_baselines.hpp"
 
 namespace fs = std::filesystem;
 using esf::test::CliRun;
@@ -64,6 +66,7 @@ class CliCompareTest : public ::testing::Test {
 };
 
 TEST_F(CliCompareTest, TrainWithABaselineDescriptorAndClassifyWithIt) {
+    ESF_REQUIRE_BASELINES();
     const std::string db = path("vfh.sqlite");
     const CliRun train = esf("train " + quoted(path("root")) + " -o " + quoted(db) +
                              " --descriptor vfh --level 0 --json");
@@ -102,6 +105,22 @@ TEST_F(CliCompareTest, TrainWithABaselineDescriptorAndClassifyWithIt) {
     EXPECT_CONTAINS(other.err, "esf: error: " + db + ": database holds vfh descriptors, not esf");
 }
 
+TEST_F(CliCompareTest, ABaselineWithoutItsModuleSaysHowToGetIt) {
+    // As in a build without PCL: the module is not where ESF_BASELINES points.
+    ASSERT_EQ(setenv("ESF_BASELINES", path("missing/libesf_baselines.so").c_str(), 1), 0);
+    const CliRun train = esf("train " + quoted(path("root")) + " -o " + quoted(path("vfh.sqlite")) +
+                             " --descriptor vfh --level 0");
+    const CliRun esf_train = esf("train " + quoted(path("root")) + " -o " +
+                                 quoted(path("esf.sqlite")) + " --descriptor esf --level 0");
+    unsetenv("ESF_BASELINES");
+    EXPECT_NE(train.code, 0);
+    EXPECT_CONTAINS(train.err, "esf: error: vfh is a PCL baseline");
+    EXPECT_CONTAINS(train.err, "-DESF_WITH_PCL=ON");
+    EXPECT_EQ(std::count(train.err.begin(), train.err.end(), '\n'), 1) << train.err;
+    EXPECT_FALSE(fs::exists(path("vfh.sqlite")));
+    EXPECT_EQ(esf_train.code, 0) << esf_train.err;  // everything else works
+}
+
 TEST_F(CliCompareTest, UnknownDescriptorNamesListTheValidOnes) {
     const CliRun train = esf("train " + quoted(path("root")) + " -o " + quoted(path("db.sqlite")) +
                              " --descriptor fpfh --level 0");
@@ -136,6 +155,7 @@ TEST_F(CliCompareTest, ABrokenMeshIsNamedAndTheOthersAreStored) {
 }
 
 TEST_F(CliCompareTest, CompareTwoDescriptorsPrintsOneRowEach) {
+    ESF_REQUIRE_BASELINES();
     const std::string test_set = write_test_set();
     const std::string common = "compare " + quoted(path("root")) + " " + quoted(test_set) +
                                " --descriptors esf,vfh --level 0 -k 3 --work " +

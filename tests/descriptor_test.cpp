@@ -25,6 +25,7 @@
 #include "esf/render.hpp"
 #include "esf/surface_angles.hpp"
 #include "facing_square.hpp"
+#include "require_baselines.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -183,6 +184,30 @@ TEST(DescriptorRegistry, StoredWeightsExpandOverTheBlocks) {
     EXPECT_THROW(esf::descriptor_dimension_weights(info, stored), std::invalid_argument);
 }
 
+TEST(DescriptorRegistry, BaselinesAreAvailableExactlyWhenBuiltWithPcl) {
+    for (const auto& name : esf::descriptor_names()) {
+        [[maybe_unused]] const bool baseline =
+            name != "esf" && name != "esf-angles" && name != "sdvs" && name != "d2";
+#ifdef ESF_TEST_WITH_PCL
+        EXPECT_TRUE(esf::descriptor_available(name)) << name;
+#else
+        EXPECT_EQ(esf::descriptor_available(name), !baseline) << name;
+        if (baseline) {
+            try {
+                esf::make_descriptor(name);
+                ADD_FAILURE() << name << ": no exception";
+            } catch (const std::invalid_argument& e) {
+                EXPECT_THAT(e.what(), HasSubstr(name + " is a PCL baseline")) << e.what();
+                EXPECT_THAT(e.what(), HasSubstr("-DESF_WITH_PCL=ON")) << e.what();
+            }
+        }
+#endif
+        // What a descriptor computes is known either way.
+        EXPECT_EQ(esf::descriptor_info(name).name, name);
+    }
+    EXPECT_THROW(esf::descriptor_available("fpfh"), std::invalid_argument);
+}
+
 TEST(DescriptorRegistry, UnknownNameListsTheValidOnes) {
     try {
         esf::make_descriptor("fpfh");
@@ -214,7 +239,13 @@ TEST(DescriptorRegistry, OptionsOutOfRange) {
     EXPECT_THROW(esf::make_descriptor("shot", options), std::invalid_argument);
 }
 
-class EveryDescriptor : public testing::TestWithParam<std::string> {};
+class EveryDescriptor : public testing::TestWithParam<std::string> {
+  protected:
+    void SetUp() override {
+        if (!esf::descriptor_available(GetParam()))
+            GTEST_SKIP() << GetParam() << ": this build has no PCL baselines module";
+    }
+};
 
 TEST_P(EveryDescriptor, ValidSignaturesOnGeneratedClouds) {
     const auto descriptor = esf::make_descriptor(GetParam());
@@ -403,6 +434,7 @@ TEST(D2Descriptor, IgnoresRotation) {
 }
 
 TEST(VfhDescriptor, PlaneFacingTheSensor) {
+    ESF_REQUIRE_BASELINES();
     // Every normal equals the mean normal and lies in no pair's plane: the three angle features
     // are 0, bin floor(45 (0 + pi) / 2 pi) = 22 of each 45-bin block. The viewpoint feature is
     // the cosine between each normal (0, 0, -1) and the direction to the sensor, which PCL
@@ -418,12 +450,14 @@ TEST(VfhDescriptor, PlaneFacingTheSensor) {
 }
 
 TEST(CvfhDescriptor, OneSignaturePerSmoothRegion) {
+    ESF_REQUIRE_BASELINES();
     EXPECT_EQ(esf::make_descriptor("cvfh")->compute(facing_square()).size(), 1u);
     EXPECT_EQ(esf::make_descriptor("cvfh")->compute(cube_corner()).size(), 3u);
     EXPECT_GE(esf::make_descriptor("our-cvfh")->compute(cube_corner()).size(), 3u);
 }
 
 TEST(PclBaselines, PreprocessingOptions) {
+    ESF_REQUIRE_BASELINES();
     // Without downsampling and outlier removal every point keeps its normal; a finer leaf
     // changes the signature, not its validity.
     esf::DescriptorOptions raw;
@@ -444,6 +478,7 @@ TEST(PclBaselines, PreprocessingOptions) {
 }
 
 TEST(PclBaselines, PclEsfRefusesCloudsItWouldSpinOn) {
+    ESF_REQUIRE_BASELINES();
     // Three distinct points among 2,000 copies of one: a non-degenerate triangle turns up in
     // about one draw in 10^8, so pcl::ESFEstimation would redraw (practically) forever. The
     // probe with PCL's own acceptance test and a bounded budget refuses the cloud first.
@@ -462,6 +497,7 @@ TEST(PclBaselines, PclEsfRefusesCloudsItWouldSpinOn) {
 }
 
 TEST(PclBaselines, TooFewPointsAfterPreprocessing) {
+    ESF_REQUIRE_BASELINES();
     // Six points span a plane (so the input is describable) but none has 5 neighbours within
     // the normal radius: nothing is left to describe.
     const Points sparse = {{0, 0, 1},       {0.1f, 0, 1},     {0, 0.1f, 1},
@@ -479,6 +515,7 @@ TEST(PclBaselines, TooFewPointsAfterPreprocessing) {
 }
 
 TEST(PclBaselines, OurCvfhFailsAloneWherePclAborts) {
+    ESF_REQUIRE_BASELINES();
     ESF_REQUIRE_DATA("meshes/apple/ycb_013_apple.ply");
     // View 29 of the YCB apple from 0.8 m (Kinect noise, seed 0): one of OURCVFHEstimation's
     // refined smooth regions keeps a single point, its reference frame comes out NaN and Debian's

@@ -26,6 +26,7 @@
 #include "esf/shape_generator.hpp"
 #include "esf/training.hpp"
 #include "esf/view_sphere.hpp"
+#include "require_baselines.hpp"
 #include "test_data.hpp"
 
 namespace fs = std::filesystem;
@@ -470,6 +471,7 @@ std::vector<BruteForceView> brute_force_views(const esf::DescriptorMatrix& m,
 }
 
 TEST(RecognizerMultiSignature, ViewDistanceIsTheBestPairOfSignatures) {
+    ESF_REQUIRE_BASELINES();
     const fs::path dir = temp_dir();
     const std::string path = (dir / "cvfh.sqlite").string();
     const esf::DescriptorKind kind{"cvfh", 1, 308};
@@ -504,6 +506,7 @@ TEST(RecognizerMultiSignature, ViewDistanceIsTheBestPairOfSignatures) {
 }
 
 TEST_F(RecognizerTest, BaselineDescriptorDatabaseEndToEnd) {
+    ESF_REQUIRE_BASELINES();
     // The training views of the mug and the bowl described with CVFH (one or more signatures a
     // view) through the descriptor registry, stored as a database of kind cvfh.
     const fs::path dir = temp_dir();

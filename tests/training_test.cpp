@@ -19,6 +19,7 @@
 #include "esf/descriptor.hpp"
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
+#include "require_baselines.hpp"
 
 namespace esf {
 namespace {
@@ -537,6 +538,7 @@ std::vector<double> signature_sums(const std::vector<float>& descriptors, std::s
 }
 
 TEST_F(TrainingRunTest, BaselinesDescribeTheViewsOfTheEsfDatabase) {
+    ESF_REQUIRE_BASELINES();
     Database esf_db(path("esf.sqlite"), OpenMode::kWrite);
     train(root(), esf_db, fast_options());
     const Snapshot esf = snapshot(esf_db);
@@ -596,6 +598,7 @@ TEST_F(TrainingRunTest, BaselinesDescribeTheViewsOfTheEsfDatabase) {
 }
 
 TEST_F(TrainingRunTest, BaselineViewsAreReproducedFromTheStoredSettings) {
+    ESF_REQUIRE_BASELINES();
     // A query described with the settings the database stores (what Recognizer's query_setup()
     // reads) matches the stored descriptor of the same view exactly, and its L1 nearest
     // neighbour is that view.
@@ -641,6 +644,7 @@ TEST_F(TrainingRunTest, BaselineViewsAreReproducedFromTheStoredSettings) {
 }
 
 TEST_F(TrainingRunTest, BaselineDatabasesResumeAndRefuseAnotherDescriptor) {
+    ESF_REQUIRE_BASELINES();
     const TrainingOptions o = baseline_options("vfh");
     Database full(path("full.sqlite"), OpenMode::kWrite);
     train(root(), full, o);
@@ -683,6 +687,7 @@ TEST_F(TrainingRunTest, BaselineDatabasesResumeAndRefuseAnotherDescriptor) {
 }
 
 TEST_F(TrainingRunTest, ViewsABaselineCannotDescribeAreSkippedAndCounted) {
+    ESF_REQUIRE_BASELINES();
     // With a leaf of 40 mesh resolutions, the voxel grid leaves a handful of points, fewer than
     // the baseline preprocessing needs: every view is skipped with the descriptor's reason.
     TrainingOptions o = baseline_options("vfh");

@@ -61,7 +61,12 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 /// be repeated options), checked against the registry.
 std::vector<std::string> checked_names(const std::vector<std::string>& requested) {
     const std::vector<std::string> valid = descriptor_names();
-    if (requested.empty()) return valid;
+    if (requested.empty()) {  // every descriptor this build can compute
+        std::vector<std::string> available;
+        for (const auto& name : valid)
+            if (descriptor_available(name)) available.push_back(name);
+        return available;
+    }
     std::vector<std::string> out;
     for (const auto& name : requested) {
         if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
@@ -70,6 +75,7 @@ std::vector<std::string> checked_names(const std::vector<std::string>& requested
             throw CLI::ValidationError("--descriptors",
                                        "unknown descriptor '" + name + "' (valid: " + list + ")");
         }
+        require_descriptor(name);
         if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(name);
     }
     return out;

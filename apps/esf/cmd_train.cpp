@@ -89,6 +89,7 @@ void run_train(const TrainArgs& args) {
         bar->update(p.models_done - existing, detail);
     };
 
+    require_descriptor(options.descriptor);  // before the database is created
     Database db(args.output, OpenMode::kWrite);
     const TrainingResult result = train(args.root, db, options);
     if (bar) bar->finish();

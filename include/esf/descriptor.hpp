@@ -142,9 +142,17 @@ std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
 /// The registered names, in the order of the table above.
 std::vector<std::string> descriptor_names();
 
+/// Checks what make_descriptor(name, options) checks before computing anything: the name and
+/// the options' ranges. Throws std::invalid_argument like make_descriptor. Needs no module.
+void check_descriptor_options(const std::string& name, const DescriptorOptions& options);
+
 /// Whether make_descriptor(name) can work in this build: always for esf, esf-angles, sdvs and
 /// d2; for the PCL baselines only when the baselines module (libesf_baselines.so, built with
 /// -DESF_WITH_PCL=ON) can be loaded. Throws std::invalid_argument for an unknown name.
 bool descriptor_available(const std::string& name);
+
+/// Throws what make_descriptor(name) would when the descriptor cannot be made in this build (an
+/// unknown name, or a PCL baseline without its module; the message says how to get it).
+void require_descriptor(const std::string& name);
 
 }  // namespace esf
