@@ -10,6 +10,7 @@
 #include <pcl/surface/convex_hull.h>
 #endif
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
