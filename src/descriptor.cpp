@@ -79,6 +79,27 @@ namespace {
 
 using detail::with_esf_blocks;
 
+/// A registry entry without blocks (with_esf_blocks() or the caller adds them).
+DescriptorInfo make_info(std::string name, int dimension, bool multi_signature, bool deterministic,
+                         std::string description, int version, int sketch_group = 0) {
+    DescriptorInfo info;
+    info.name = std::move(name);
+    info.dimension = dimension;
+    info.multi_signature = multi_signature;
+    info.deterministic = deterministic;
+    info.description = std::move(description);
+    info.version = version;
+    info.sketch_group = sketch_group;
+    return info;
+}
+
+DescriptorInfo with_blocks(DescriptorInfo info, std::vector<int> sizes,
+                           std::vector<std::string> names) {
+    info.blocks = std::move(sizes);
+    info.block_names = std::move(names);
+    return info;
+}
+
 /// An EsfEstimatorPool whose errors name the descriptor ("<name>: " in front). The estimator
 /// drops non-finite points itself and rejects what describable_points() rejects, in the same
 /// words.
@@ -110,14 +131,10 @@ EsfOptions fast_esf_options(const DescriptorOptions& options) {
 class EsfGlobal final : public GlobalDescriptor {
   public:
     explicit EsfGlobal(const DescriptorOptions& options)
-        : info_(with_esf_blocks(
-              {"esf",
-               kEsfSize,
-               false,
-               true,
-               "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded",
-               {},
-               {}})),
+        : info_(with_esf_blocks(make_info(
+              "esf", kEsfSize, false, true,
+              "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded",
+              kEsfVersion))),
           pool_(fast_esf_options(options)) {}
     const DescriptorInfo& info() const override { return info_; }
 
@@ -141,21 +158,13 @@ class EsfGlobal final : public GlobalDescriptor {
 class D2Global final : public GlobalDescriptor {
   public:
     D2Global(const DescriptorOptions& options, bool split)
-        : info_(split ? DescriptorInfo{"sdvs",
-                                       3 * kEsfBins,
-                                       false,
-                                       true,
-                                       "SDVS: D2 split by voxel-line class IN, OUT, MIXED "
-                                       "(Wohlkinger & Vincze 2011)",
-                                       {kEsfBins, kEsfBins, kEsfBins},
-                                       {"d2_in", "d2_out", "d2_mixed"}}
-                      : DescriptorInfo{"d2",
-                                       kEsfBins,
-                                       false,
-                                       true,
-                                       "D2 shape distribution (Osada et al. 2002)",
-                                       {},
-                                       {}}),
+        : info_(split ? with_blocks(make_info("sdvs", 3 * kEsfBins, false, true,
+                                              "SDVS: D2 split by voxel-line class IN, OUT, "
+                                              "MIXED (Wohlkinger & Vincze 2011)",
+                                              kEsfVersion),
+                                    {kEsfBins, kEsfBins, kEsfBins}, {"d2_in", "d2_out", "d2_mixed"})
+                      : make_info("d2", kEsfBins, false, true,
+                                  "D2 shape distribution (Osada et al. 2002)", kEsfVersion)),
           pool_(fast_esf_options(options)),
           split_(split) {}
     const DescriptorInfo& info() const override { return info_; }
@@ -200,15 +209,12 @@ constexpr std::array<const char*, kSurfaceAngleBlocks> kAngleBlockNames = {
 class EsfAnglesGlobal final : public GlobalDescriptor {
   public:
     explicit EsfAnglesGlobal(const DescriptorOptions& options)
-        : info_(with_esf_blocks({"esf-angles",
-                                 kEsfAnglesSize,
-                                 false,
-                                 true,
-                                 "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle "
-                                 "histograms (VFH's angles, Rusu et al. 2010), seeded",
-                                 {},
-                                 {}},
-                                kAngleBlockSizes, kAngleBlockNames)),
+        : info_(with_esf_blocks(
+              make_info("esf-angles", kEsfAnglesSize, false, true,
+                        "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms "
+                        "(VFH's angles, Rusu et al. 2010), seeded",
+                        kEsfVersion * 100 + kSurfaceAnglesVersion, 2),
+              kAngleBlockSizes, kAngleBlockNames)),
           pool_(fast_esf_options(options)),
           weight_(options.angles_weight) {}
     const DescriptorInfo& info() const override { return info_; }
@@ -274,38 +280,25 @@ bool is_baseline(const std::string& name) {
 
 /// What each baseline computes: known without loading the module.
 DescriptorInfo baseline_info(const std::string& name) {
+    constexpr int v = kBaselineDescriptorVersion;
     if (name == "pcl-esf")
         return with_esf_blocks(
-            {name,
-             kEsfSize,
-             false,
-             false,
-             "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)",
-             {},
-             {}});
-    if (name == "vfh") return {name, 308, false, true, "PCL VFH (Rusu et al. 2010)", {}, {}};
+            make_info(name, kEsfSize, false, false,
+                      "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)", v));
+    if (name == "vfh") return make_info(name, 308, false, true, "PCL VFH (Rusu et al. 2010)", v);
     if (name == "cvfh")
-        return {
-            name, 308, true, true, "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)",
-            {},   {}};
+        return make_info(name, 308, true, true,
+                         "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)", v);
     if (name == "our-cvfh")
-        return {name,
-                308,
-                true,
-                true,
-                "PCL OUR-CVFH, one signature per region and reference frame (Aldoma et al. "
-                "2012)",
-                {},
-                {}};
+        return make_info(name, 308, true, true,
+                         "PCL OUR-CVFH, one signature per region and reference frame (Aldoma et "
+                         "al. 2012)",
+                         v);
     if (name == "gasd")
-        return {name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", {}, {}};
-    return {name,
-            352,
-            false,
-            true,
-            "PCL SHOT at the centroid, radius covering the object (Tombari et al. 2010)",
-            {},
-            {}};
+        return make_info(name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", v);
+    return make_info(name, 352, false, true,
+                     "PCL SHOT at the centroid, radius covering the object (Tombari et al. 2010)",
+                     v);
 }
 
 }  // namespace
@@ -345,6 +338,10 @@ DescriptorInfo descriptor_info(const std::string& name) {
     check_name(name);
     return is_baseline(name) ? baseline_info(name) : make_descriptor(name)->info();
 }
+
+int stored_descriptor_version(const std::string& name) { return descriptor_info(name).version; }
+
+int descriptor_sketch_group(const std::string& name) { return descriptor_info(name).sketch_group; }
 
 std::vector<std::size_t> descriptor_blocks(const DescriptorInfo& info) {
     if (info.blocks.empty()) return {static_cast<std::size_t>(info.dimension)};

@@ -160,6 +160,14 @@ TEST(DescriptorRegistry, NamesAndInfo) {
     EXPECT_EQ(esf::descriptor_info("esf-angles").blocks.size(), 16u);
     EXPECT_EQ(esf::descriptor_info("esf-angles").block_names[15], "sigma");
     EXPECT_EQ(esf::descriptor_blocks(esf::descriptor_info("vfh")), std::vector<std::size_t>{308});
+    // Versions and search settings come from the registry too.
+    EXPECT_EQ(esf::stored_descriptor_version("esf"), esf::kEsfVersion);
+    EXPECT_EQ(esf::stored_descriptor_version("d2"), esf::kEsfVersion);
+    EXPECT_EQ(esf::stored_descriptor_version("esf-angles"),
+              esf::kEsfVersion * 100 + esf::kSurfaceAnglesVersion);
+    EXPECT_EQ(esf::stored_descriptor_version("shot"), esf::kBaselineDescriptorVersion);
+    EXPECT_EQ(esf::descriptor_sketch_group("esf-angles"), 2);
+    EXPECT_EQ(esf::descriptor_sketch_group("esf"), 0);
 }
 
 TEST(DescriptorRegistry, StoredWeightsExpandOverTheBlocks) {

@@ -54,29 +54,16 @@
 
 namespace esf {
 
-/// The version train() stores for a descriptor: kEsfVersion for "esf" and for "sdvs" and "d2"
-/// (blocks of ESF's sampler), kBaselineDescriptorVersion for the others (what Recognizer's
-/// descriptor_version() expects).
+/// The version train() stores for the baselines (DescriptorInfo::version).
 inline constexpr int kBaselineDescriptorVersion = 1;
 /// Version of the surface angle part of "esf-angles"; that descriptor's stored version is
 /// kEsfVersion * 100 + this, so that a change of either part is refused.
 inline constexpr int kSurfaceAnglesVersion = 1;
-inline int stored_descriptor_version(const std::string& name) {
-    if (name == "esf-angles") return kEsfVersion * 100 + kSurfaceAnglesVersion;
-    return name == "esf" || name == "sdvs" || name == "d2" ? kEsfVersion
-                                                           : kBaselineDescriptorVersion;
-}
 
 /// "esf-angles": ESF's 640 bins, then the surface angle histograms, weighted kEsfAnglesWeight
 /// against ESF's 1 before the signature is normalised to sum 1.
 inline constexpr int kEsfAnglesSize = kEsfSize + kSurfaceAngleSize;
 inline constexpr double kEsfAnglesWeight = 1.0;
-
-/// The sketch group (KnnIndexOptions::sketch_group) that searches a descriptor's signatures
-/// fastest: 2 for esf-angles, whose distances lie closer together than ESF's (with the
-/// default, sums of 12 bins, a search computes exact distances for about a fifth of the
-/// views; with 2, a sketch of 368 bytes, for few), 0 (the default) for the others.
-inline int descriptor_sketch_group(const std::string& name) { return name == "esf-angles" ? 2 : 0; }
 
 /// What a descriptor computes.
 struct DescriptorInfo {
@@ -89,7 +76,20 @@ struct DescriptorInfo {
     /// weights): their sizes in order, summing to `dimension`; empty means one block.
     std::vector<int> blocks;
     std::vector<std::string> block_names;  ///< one per block ("D2-IN", "alpha", ...)
+    /// The version train() stores and Recognizer requires: kEsfVersion for esf, sdvs and d2
+    /// (blocks of ESF's sampler), kEsfVersion * 100 + kSurfaceAnglesVersion for esf-angles,
+    /// kBaselineDescriptorVersion for the PCL baselines.
+    int version = 0;
+    /// The sketch group (KnnIndexOptions::sketch_group) that searches its signatures fastest:
+    /// 2 for esf-angles, whose distances lie closer together than ESF's (with the default, sums
+    /// of 12 bins, a search computes exact distances for about a fifth of the views; with 2, a
+    /// sketch of 368 bytes, for few), 0 (the default) for the others.
+    int sketch_group = 0;
 };
+
+/// descriptor_info(name).version and .sketch_group.
+int stored_descriptor_version(const std::string& name);
+int descriptor_sketch_group(const std::string& name);
 
 /// What make_descriptor(name) computes, without computing anything. Throws like make_descriptor.
 DescriptorInfo descriptor_info(const std::string& name);
