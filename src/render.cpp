@@ -458,7 +458,7 @@ std::size_t MeshRenderer::view_count() const { return impl_->kept.size(); }
 
 int MeshRenderer::view_index(std::size_t index) const {
     if (index >= impl_->kept.size())
-        throw std::out_of_range("view index " + std::to_string(index) + " out of range (" +
+        throw std::invalid_argument("view index " + std::to_string(index) + " out of range (" +
                                 std::to_string(impl_->kept.size()) + " views)");
     return impl_->kept[index];
 }

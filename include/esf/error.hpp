@@ -1,8 +1,11 @@
 #pragma once
 // Error types shared by every module.
 //
-// Broken preconditions (empty clouds, bad options) throw std::invalid_argument; problems with
-// files throw esf::IoError, whose message starts with the file name (and line, where known).
+// Broken preconditions (empty clouds, bad options, an index out of range) throw
+// std::invalid_argument; problems with files throw esf::IoError, whose message starts with the
+// file name (and line, where known). Only a failure of the system itself (Embree cannot create
+// a device, the PNG encoder cannot allocate, a PCL baseline's helper process cannot be started)
+// is a plain std::runtime_error naming what failed.
 
 #include <stdexcept>
 #include <string>

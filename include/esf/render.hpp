@@ -79,13 +79,13 @@ class MeshRenderer {
     MeshRenderer& operator=(MeshRenderer&&) noexcept;
 
     std::size_t view_count() const;  ///< cameras kept (see RenderOptions::min_elevation)
-    /// View sphere index of kept camera `index`. Throws std::out_of_range past view_count().
+    /// View sphere index of kept camera `index`. Throws std::invalid_argument past view_count().
     int view_index(std::size_t index) const;
     /// Renders view `index` (0 .. view_count() - 1, the kept cameras in view sphere order): the
     /// camera sits at centre + distance * view_sphere(level)[view_index(index)] (in scaled model
     /// coordinates) and looks at the centre, image up = model +z (see look_at); the distance is
     /// camera_distance(), or drawn from [camera_distance(), max_distance]. The result's index is
-    /// the view sphere index. Throws std::out_of_range past view_count().
+    /// the view sphere index. Throws std::invalid_argument past view_count().
     RenderedView render_view(std::size_t index) const;
     /// Renders the model from any camera: `scaled_model_to_camera` is the rigid motion from the
     /// model's file coordinates times scale() (metres) to the camera. The sensor noise is keyed
