@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
         esf::PointCloud cloud;
         for (int i = 0; i < 40; ++i)  // three faces of a 10 cm box, 1,600 points each
             for (int j = 0; j < 40; ++j) {
-                const float u = 0.0025f * static_cast<float>(i), v = 0.0025f * static_cast<float>(j);
+                const float u = 0.0025f * static_cast<float>(i),
+                            v = 0.0025f * static_cast<float>(j);
                 cloud.points.emplace_back(u, v, 0.8f);
                 cloud.points.emplace_back(u, 0.1f, 0.8f + v);
                 cloud.points.emplace_back(0.1f, u, 0.8f + v);
