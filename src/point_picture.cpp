@@ -26,6 +26,30 @@ constexpr std::array<std::array<Rgb, 2>, 3> kRamps = {{
     {{{20, 60, 150}, {150, 190, 240}}},  // query
 }};
 
+/// The smallest square that closes the gaps between neighbouring points: the side of the
+/// bounding box's share per distinct pixel hit, sqrt(box / hits), rounded up, 1 to 8. A cloud
+/// denser than the picture gets 1 or 2; a sensor's pixel grid enlarged k times gets about k.
+template <class Hits>
+int auto_point_size(const Hits& hits, int w, int h) {
+    if (hits.empty()) return 1;
+    std::vector<bool> seen(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), false);
+    int min_u = w, max_u = -1, min_v = h, max_v = -1;
+    double distinct = 0.0;
+    for (const auto& hit : hits) {
+        const std::size_t i = static_cast<std::size_t>(hit.v) * static_cast<std::size_t>(w) +
+                              static_cast<std::size_t>(hit.u);
+        if (seen[i]) continue;
+        seen[i] = true;
+        distinct += 1.0;
+        min_u = std::min(min_u, hit.u);
+        max_u = std::max(max_u, hit.u);
+        min_v = std::min(min_v, hit.v);
+        max_v = std::max(max_v, hit.v);
+    }
+    const double box = static_cast<double>(max_u - min_u + 1) * (max_v - min_v + 1);
+    return std::clamp(static_cast<int>(std::ceil(std::sqrt(box / distinct))), 1, 8);
+}
+
 }  // namespace
 
 std::optional<Eigen::Vector2d> PictureProjection::project(const Eigen::Vector3f& p) const {
@@ -72,8 +96,8 @@ PictureProjection fit_projection(std::span<const Eigen::Vector3f> points, int wi
 
 PointPicture draw_points(std::span<const Eigen::Vector3f> points,
                          const PointPictureOptions& options, std::span<const std::uint8_t> tints) {
-    if (options.point_size < 1)
-        throw std::invalid_argument("picture: point_size must be at least 1, got " +
+    if (options.point_size < 0)
+        throw std::invalid_argument("picture: point_size must be 0 (auto) or more, got " +
                                     std::to_string(options.point_size));
     if (!tints.empty() && tints.size() != points.size())
         throw std::invalid_argument("picture: " + std::to_string(tints.size()) + " tints for " +
@@ -89,23 +113,33 @@ PointPicture draw_points(std::span<const Eigen::Vector3f> points,
     out.width = w;
     out.height = h;
     const auto pixels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-    std::vector<float> depth(pixels, std::numeric_limits<float>::infinity());
-    std::vector<std::uint8_t> tint(pixels, 0);
-    float near = std::numeric_limits<float>::infinity(), far = -near;
-    const int lo = (options.point_size - 1) / 2, hi = options.point_size / 2;
+    // The pixel of every point that lands inside.
+    struct Hit {
+        std::size_t point;
+        int u, v;
+    };
+    std::vector<Hit> hits;
+    hits.reserve(points.size());
     for (std::size_t n = 0; n < points.size(); ++n) {
         const auto uv = out.projection.project(points[n]);
         if (!uv) continue;
         const double fu = std::floor(uv->x()), fv = std::floor(uv->y());
         if (fu < 0.0 || fv < 0.0 || fu >= w || fv >= h) continue;
-        const int u = static_cast<int>(fu), v = static_cast<int>(fv);
-        const float z = points[n].z();
-        ++out.drawn;
+        hits.push_back({n, static_cast<int>(fu), static_cast<int>(fv)});
+    }
+    out.drawn = hits.size();
+    const int size = options.point_size ? options.point_size : auto_point_size(hits, w, h);
+    std::vector<float> depth(pixels, std::numeric_limits<float>::infinity());
+    std::vector<std::uint8_t> tint(pixels, 0);
+    float near = std::numeric_limits<float>::infinity(), far = -near;
+    const int lo = (size - 1) / 2, hi = size / 2;
+    for (const Hit& hit : hits) {
+        const float z = points[hit.point].z();
         near = std::min(near, z);
         far = std::max(far, z);
-        const std::uint8_t t = tints.empty() ? kTintGrey : tints[n];
-        for (int y = std::max(v - lo, 0); y <= std::min(v + hi, h - 1); ++y)
-            for (int x = std::max(u - lo, 0); x <= std::min(u + hi, w - 1); ++x) {
+        const std::uint8_t t = tints.empty() ? kTintGrey : tints[hit.point];
+        for (int y = std::max(hit.v - lo, 0); y <= std::min(hit.v + hi, h - 1); ++y)
+            for (int x = std::max(hit.u - lo, 0); x <= std::min(hit.u + hi, w - 1); ++x) {
                 const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                                       static_cast<std::size_t>(x);
                 if (z < depth[i]) {

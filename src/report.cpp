@@ -423,6 +423,13 @@ std::string rank_curves_svg(const EvaluationReport& report, const ReportOptions&
 
 namespace {
 
+/// The file's folder and name ("bowl/view_003.pcd"), enough to tell the queries apart.
+std::string short_path(const std::string& file) {
+    const fs::path path(file);
+    const fs::path parent = path.parent_path().filename();
+    return parent.empty() ? path.filename().string() : (parent / path.filename()).string();
+}
+
 void gallery_picture(std::ostream& o, const GalleryPicture& p) {
     o << "<figure>";
     if (p.png.empty())
@@ -434,7 +441,7 @@ void gallery_picture(std::ostream& o, const GalleryPicture& p) {
 
 /// The misclassified queries: query, nearest view, nearest view of the true class.
 void gallery_html(std::ostream& o, const std::vector<GalleryEntry>& gallery) {
-    o << "<h2>Misclassified views</h2>\n<p>" << gallery.size()
+    o << "<h2 id=\"misclassified\">Misclassified views</h2>\n<p>" << gallery.size()
       << " queries whose nearest view has another class: the query (blue, shaded by depth), "
          "the training view it was matched to, and the nearest view of its true class.</p>\n"
       << "<div class=\"gallery\">\n";
@@ -446,7 +453,7 @@ void gallery_html(std::ostream& o, const std::vector<GalleryEntry>& gallery) {
         o << "</div><p><b>" << xml_escape(e.true_class) << "</b> seen as <b>"
           << xml_escape(e.predicted) << "</b> (rank "
           << (e.rank ? std::to_string(e.rank) : std::string("&gt; k")) << ")<br>"
-          << xml_escape(fs::path(e.file).filename().string())
+          << xml_escape(short_path(e.file))
           << "<br>nearest: " << xml_escape(e.matched_view.empty() ? "-" : e.matched_view)
           << ", distance " << fixed(e.matched_distance, 4) << "<br>nearest "
           << xml_escape(e.true_class) << ": " << xml_escape(e.true_view.empty() ? "-" : e.true_view)

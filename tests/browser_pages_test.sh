@@ -6,7 +6,7 @@
 # shows them. Skips (exit 77) when Chromium is not installed.
 #
 # Usage: browser_pages_test.sh ESF_BINARY [DATA_DIR]   (ESF_DATA, else DATA_DIR: the shared data,
-# for a real mOSD scene too)
+# for a real mOSD scene too). ESF_KEEP_PAGES=DIR keeps the pages there for a person to look at.
 set -euo pipefail
 esf=$1
 data=${ESF_DATA:-${2:-}}
@@ -60,6 +60,10 @@ if [ "$wrong" -lt 1 ] || [ "$shown" -ne "$wrong" ]; then
     exit 1
 fi
 echo "gallery: $shown misclassified queries"
+
+if [ -n "${ESF_KEEP_PAGES:-}" ]; then
+    mkdir -p "$ESF_KEEP_PAGES" && cp -r demo scene eval "$ESF_KEEP_PAGES"/
+fi
 
 pages=(demo/index.html demo/scene.html scene/index.html scene/scene_*.html eval/index.html)
 python3 "$here/page_check.py" "$chromium" "$work" "${pages[@]}"

@@ -23,7 +23,7 @@ import zlib
 
 
 def decode_png(data):
-    """(width, height, rows of (r, g, b) tuples) of an 8-bit grey, RGB or RGBA PNG."""
+    """(width, height, channels, rows as bytes) of an 8-bit grey, RGB or RGBA PNG."""
     if data[:8] != b"\x89PNG\r\n\x1a\n":
         raise ValueError("not a PNG")
     pos, idat, header = 8, b"", None
@@ -42,30 +42,41 @@ def decode_png(data):
                          (depth, colour, interlace))
     raw = zlib.decompress(idat)
     stride = width * channels
-    rows, previous = [], bytearray(stride)
+    if len(raw) != height * (stride + 1):
+        raise ValueError("truncated PNG data")
+    rows, previous = [], bytes(stride)
     for y in range(height):
         kind = raw[y * (stride + 1)]
         line = bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for i in range(stride):
-            a = line[i - channels] if i >= channels else 0
-            b = previous[i]
-            c = previous[i - channels] if i >= channels else 0
-            if kind == 1:
-                line[i] = (line[i] + a) & 255
-            elif kind == 2:
-                line[i] = (line[i] + b) & 255
-            elif kind == 3:
-                line[i] = (line[i] + (a + b) // 2) & 255
-            elif kind == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        previous = line
-        if channels == 1:
-            rows.append([(v, v, v) for v in line])
-        else:
-            rows.append([tuple(line[x * channels:x * channels + 3]) for x in range(width)])
-    return width, height, rows
+        if kind == 2:  # up (the common case: a row like the one above is all zeros)
+            line = bytearray(previous) if not any(line) else bytearray(
+                (a + b) & 255 for a, b in zip(line, previous))
+        elif kind in (1, 3, 4):
+            for i in range(stride):
+                a = line[i - channels] if i >= channels else 0
+                b = previous[i]
+                c = previous[i - channels] if i >= channels else 0
+                if kind == 1:
+                    line[i] = (line[i] + a) & 255
+                elif kind == 3:
+                    line[i] = (line[i] + (a + b) // 2) & 255
+                else:
+                    p = a + b - c
+                    pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                    line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        elif kind != 0:
+            raise ValueError("bad PNG filter %d" % kind)
+        previous = bytes(line)
+        rows.append(previous)
+    return width, height, channels, rows
+
+
+def colours(row, channels, xs=None):
+    """The set of RGB colours of a decoded row (of the pixels xs, default all)."""
+    xs = range(len(row) // channels) if xs is None else xs
+    if channels == 1:
+        return {(row[x],) * 3 for x in xs}
+    return {bytes(row[x * channels:x * channels + 3]) for x in xs}
 
 
 def screenshot(chromium, workdir, page, name):
@@ -100,26 +111,34 @@ def check(chromium, workdir, page):
     uris = re.findall(r'data:image/png;base64,([A-Za-z0-9+/=]*)', html)
     for n, uri in enumerate(uris):
         try:
-            _, _, rows = decode_png(base64.b64decode(uri))
+            _, _, channels, rows = decode_png(base64.b64decode(uri))
         except Exception as e:  # noqa: BLE001 - any decoding problem is a failure
             problems.append("embedded picture %d does not decode: %s" % (n, e))
             continue
-        if len({p for row in rows for p in row}) < 3:
+        if len(set().union(*(colours(row, channels) for row in rows))) < 3:
             problems.append("embedded picture %d is blank" % n)
-    (w, h, with_pictures), console = screenshot(chromium, workdir, page, "with.png")
+    (w, h, channels, with_pictures), console = screenshot(chromium, workdir, page, "with.png")
     problems += ["console: " + l for l in console]
     bare = os.path.join(workdir, "bare.html")
     with open(bare, "w", encoding="utf-8") as f:
         f.write(re.sub(r'data:image/png;base64,[A-Za-z0-9+/=]*', "", html))
-    (_, _, without), _ = screenshot(chromium, workdir, bare, "without.png")
-    changed = [with_pictures[y][x] for y in range(h) for x in range(w)
-               if with_pictures[y][x] != without[y][x]]
-    colours = len(set(changed))
-    if uris and (len(changed) < 2000 or colours < 16):
+    (_, _, bare_channels, without), _ = screenshot(chromium, workdir, bare, "without.png")
+    changed, shown = 0, set()
+    if bare_channels != channels:
+        problems.append("the two screenshots differ in format")
+    else:
+        for y in range(h):
+            if with_pictures[y] == without[y]:
+                continue
+            xs = [x for x in range(w) if with_pictures[y][x * channels:(x + 1) * channels] !=
+                  without[y][x * channels:(x + 1) * channels]]
+            changed += len(xs)
+            shown |= colours(with_pictures[y], channels, xs)
+    if uris and (changed < 2000 or len(shown) < 16):
         problems.append("the pictures are not on screen: %d pixels changed, %d colours" %
-                        (len(changed), colours))
+                        (changed, len(shown)))
     print("%s: %.1f kB, %d pictures, %d pixels from pictures in %d colours%s" %
-          (os.path.basename(page), size / 1024.0, len(uris), len(changed), colours,
+          (os.path.basename(page), size / 1024.0, len(uris), changed, len(shown),
            "" if not problems else ", FAILED"))
     for p in problems:
         print("  " + p)

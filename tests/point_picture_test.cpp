@@ -97,6 +97,29 @@ TEST(PointPicture, PointSizeDrawsASquareAroundThePixel) {
     EXPECT_EQ(pixel(p2, 79, 59), kWhite);
 }
 
+TEST(PointPicture, AutomaticPointSizeClosesTheGapsOfASparseGrid) {
+    // A 5 x 5 grid of points 4 pixels apart (u, v = 72 .. 88 and 52 .. 68): its box is
+    // 17 x 17 = 289 pixels for 25 hits, sqrt(289 / 25) = 3.4 -> squares of 4 that tile it.
+    std::vector<Eigen::Vector3f> points;
+    for (int j = -2; j <= 2; ++j)
+        for (int i = -2; i <= 2; ++i)
+            points.emplace_back(0.04f * static_cast<float>(i) + 0.001f,
+                                0.04f * static_cast<float>(j) + 0.001f, 1.0f);
+    esf::PointPictureOptions o = fixed_camera(0);
+    const esf::PointPicture p = esf::draw_points(points, o);
+    EXPECT_EQ(p.drawn, 25u);
+    EXPECT_EQ(lit_pixels(p), 20u * 20u);  // 71 .. 90 in both directions
+    for (int y = 51; y <= 70; ++y)
+        for (int x = 71; x <= 90; ++x) EXPECT_NE(pixel(p, x, y), kWhite) << x << ", " << y;
+    // A dense cloud (a point per pixel) keeps single pixels.
+    std::vector<Eigen::Vector3f> dense;
+    for (int j = 0; j < 10; ++j)
+        for (int i = 0; i < 10; ++i)
+            dense.emplace_back(0.01f * static_cast<float>(i) + 0.0005f,
+                               0.01f * static_cast<float>(j) + 0.0005f, 1.0f);
+    EXPECT_EQ(lit_pixels(esf::draw_points(dense, o)), 100u);
+}
+
 TEST(PointPicture, TintsPickTheRamp) {
     const std::vector<Eigen::Vector3f> points = {{0.0f, 0.0f, 1.0f}, {0.2f, 0.0f, 1.0f}};
     const std::vector<std::uint8_t> tints = {esf::kTintTable, esf::kTintBlue};
@@ -153,12 +176,12 @@ TEST(PointPicture, DataUriAndPng) {
 TEST(PointPicture, BadOptionsThrowNamingTheValue) {
     const std::vector<Eigen::Vector3f> points = {{0.0f, 0.0f, 1.0f}};
     esf::PointPictureOptions o;
-    o.point_size = 0;
+    o.point_size = -1;
     try {
         esf::draw_points(points, o);
         FAIL() << "no exception";
     } catch (const std::invalid_argument& e) {
-        EXPECT_NE(std::string(e.what()).find("point_size must be at least 1, got 0"),
+        EXPECT_NE(std::string(e.what()).find("point_size must be 0 (auto) or more, got -1"),
                   std::string::npos)
             << e.what();
     }

@@ -41,8 +41,10 @@ struct PointPictureOptions {
     int width = 160;
     int height = 120;
     int margin = 4;  ///< for the fitted projection
-    /// Side of the square drawn per point (pixels, >= 1); centred on the point's pixel.
-    int point_size = 2;
+    /// Side of the square drawn per point (pixels), centred on the point's pixel; 0 = auto: about
+    /// the spacing of neighbouring points in the picture, sqrt(bounding box / pixels hit)
+    /// rounded up, 1 to 8, so that sparse clouds (a sensor's grid enlarged) show as surfaces.
+    int point_size = 0;
     /// When set, used instead of fit_projection() (its width and height win over the above).
     std::optional<PictureProjection> projection;
 };
@@ -64,7 +66,7 @@ inline constexpr std::uint8_t kTintBlue = 2;   ///< blue ramp (a query)
 /// Draws the points: each one that projects inside the picture paints a point_size square, the
 /// nearest (smallest z) wins where they overlap; shades run from dark (the nearest drawn point)
 /// to light (the farthest). `tints` is empty (all kTintGrey) or holds one tint per point.
-/// Throws std::invalid_argument for a size below 1 x 1, point_size < 1, or tints of another
+/// Throws std::invalid_argument for a size below 1 x 1, point_size < 0, or tints of another
 /// length than points.
 PointPicture draw_points(std::span<const Eigen::Vector3f> points,
                          const PointPictureOptions& options = {},
