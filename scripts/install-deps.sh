@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages esf builds against, when any is missing.
+# Installs the Debian 12 packages esf builds against, when any is missing (chromium: the
+# browser test of the report pages, ctest browser_pages).
 set -euo pipefail
 packages=(
     build-essential cmake pkg-config clang-format
@@ -7,6 +8,7 @@ packages=(
     libcli11-dev libsqlite3-dev libpng-dev libfmt-dev nlohmann-json3-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     python3-dev pybind11-dev python3-numpy python3-pytest python3-venv
+    chromium
 )
 missing=()
 for p in "${packages[@]}"; do

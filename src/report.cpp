@@ -34,24 +34,6 @@ std::string fixed(double v, int digits) {
 
 std::string percent(double fraction) { return fixed(100.0 * fraction, 1); }
 
-std::string base64(const std::vector<std::uint8_t>& bytes) {
-    static const char* const kTable =
-        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    out.reserve((bytes.size() + 2) / 3 * 4);
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        const std::uint32_t b0 = bytes[i];
-        const std::uint32_t b1 = i + 1 < bytes.size() ? bytes[i + 1] : 0;
-        const std::uint32_t b2 = i + 2 < bytes.size() ? bytes[i + 2] : 0;
-        const std::uint32_t v = (b0 << 16) | (b1 << 8) | b2;
-        out += kTable[(v >> 18) & 63];
-        out += kTable[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? kTable[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? kTable[v & 63] : '=';
-    }
-    return out;
-}
-
 void write_file(const fs::path& path, const void* data, std::size_t size) {
     detail::write_file_atomically(path, data, size);
 }
@@ -92,78 +74,15 @@ const std::array<const char*, 20> kPalette = {
     "#7f7f7f", "#bcbd22", "#17becf", "#aec7e8", "#ffbb78", "#98df8a", "#ff9896",
     "#c5b0d5", "#c49c94", "#f7b6d2", "#c7c7c7", "#dbdb8d", "#9edae5"};
 
-// ---- a 5x7 bitmap font ----------------------------------------------------------------------
+// ---- text sizes -----------------------------------------------------------------------------
 
-struct Glyph {
-    char c;
-    std::array<std::uint8_t, 7> rows;  // 5 bits each, bit 4 = leftmost column
-};
+/// Width of a character of the SVG's labels at `scale` (sans-serif at 6 * scale + 1 px runs
+/// narrower than this, so labels fit the space laid out for them).
+constexpr int kCharAdvance = 6;
 
-// clang-format off
-constexpr std::array<Glyph, 51> kFont = {{
-    {'A', {0x0E, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
-    {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
-    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}},
-    {'D', {0x1E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x1E}},
-    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}},
-    {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
-    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}},
-    {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
-    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
-    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}},
-    {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
-    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}},
-    {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
-    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}},
-    {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
-    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}},
-    {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
-    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}},
-    {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
-    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}},
-    {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
-    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}},
-    {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
-    {'Y', {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04}},
-    {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
-    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}},
-    {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}},
-    {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
-    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}},
-    {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
-    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}},
-    {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}},
-    {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
-    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}},
-    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}},
-    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
-    {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}},
-    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
-    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}},
-    {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
-    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}},
-    {'#', {0x0A, 0x0A, 0x1F, 0x0A, 0x1F, 0x0A, 0x0A}},
-    {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
-    {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}},
-    {'\'', {0x0C, 0x04, 0x08, 0x00, 0x00, 0x00, 0x00}},
-    {' ', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}},
-    {'?', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x00, 0x04}},
-}};
-// clang-format on
-
-const std::array<std::uint8_t, 7>& glyph(char c) {
-    const char u = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-    for (const Glyph& g : kFont)
-        if (g.c == u) return g.rows;
-    return kFont.back().rows;  // '?'
+int text_width(const std::string& s, int scale) {
+    return static_cast<int>(s.size()) * kCharAdvance * scale;
 }
-
-constexpr int kGlyphAdvance = 6;  // 5 columns + 1 space, in font pixels
-constexpr int kGlyphHeight = 7;
 
 /// An 8-bit RGB raster.
 class Image {
@@ -188,31 +107,11 @@ class Image {
         for (int j = y; j < y + h; ++j)
             for (int i = x; i < x + w; ++i) set(i, j, c);
     }
-    /// Text with its top-left corner at (x, y); `vertical` runs bottom to top with (x, y) the
-    /// bottom-left corner of the first glyph (rotated 90 degrees counter-clockwise).
-    void text(int x, int y, const std::string& s, int scale, Rgb c, bool vertical = false) {
-        for (std::size_t n = 0; n < s.size(); ++n) {
-            const auto& rows = glyph(s[n]);
-            const int advance = static_cast<int>(n) * kGlyphAdvance * scale;
-            for (int row = 0; row < kGlyphHeight; ++row)
-                for (int col = 0; col < 5; ++col) {
-                    if (!(rows[static_cast<std::size_t>(row)] & (0x10 >> col))) continue;
-                    if (!vertical)
-                        fill(x + advance + col * scale, y + row * scale, scale, scale, c);
-                    else  // font x -> up, font y -> right
-                        fill(x + row * scale, y - advance - (col + 1) * scale, scale, scale, c);
-                }
-        }
-    }
 
   private:
     int width_, height_;
     std::vector<std::uint8_t> pixels_;
 };
-
-int text_width(const std::string& s, int scale) {
-    return static_cast<int>(s.size()) * kGlyphAdvance * scale;
-}
 
 // ---- PNG ------------------------------------------------------------------------------------
 
@@ -243,7 +142,7 @@ ConfusionLayout confusion_layout(const EvaluationReport& report, const ReportOpt
     std::size_t row_chars = 10, column_chars = 10;  // "true class", "1-nn class"
     for (const auto& s : report.confusion_rows) row_chars = std::max(row_chars, s.size());
     for (const auto& s : report.confusion_columns) column_chars = std::max(column_chars, s.size());
-    const int char_w = kGlyphAdvance * l.label_scale;
+    const int char_w = kCharAdvance * l.label_scale;
     l.title = options.title;
     l.subtitle = "confusion: rows = true class, columns = 1-nn class, colour = % of the row";
     l.left = 12 + static_cast<int>(row_chars) * char_w + 8;
@@ -345,61 +244,39 @@ std::string report_json(const EvaluationReport& report, const ReportOptions& opt
 
 std::vector<std::uint8_t> confusion_png(const EvaluationReport& report,
                                         const ReportOptions& options) {
+    // The cells only: labels and counts are text, and text lives in confusion.svg.
     const ConfusionLayout l = confusion_layout(report, options);
-    Image image(l.width, l.height);
-    const Rgb black{0, 0, 0}, white{255, 255, 255}, grid{200, 200, 200}, accent{200, 30, 30};
-    image.text(12, 12, l.title, 2, black);
-    image.text(12, 12 + 16 + 6, l.subtitle, 1, black);
-    const int s = l.label_scale, char_h = kGlyphHeight * s;
-    // Column labels, vertical, above their columns; row labels right-aligned on the left.
-    for (std::size_t c = 0; c < l.columns; ++c) {
-        const int x = l.left + static_cast<int>(c) * l.cell + (l.cell - char_h) / 2;
-        image.text(x, l.top - 8, report.confusion_columns[c], s, black, true);
-    }
-    for (std::size_t r = 0; r < l.rows; ++r) {
-        const std::string& name = report.confusion_rows[r];
-        const int y = l.top + static_cast<int>(r) * l.cell + (l.cell - char_h) / 2;
-        image.text(l.left - 8 - text_width(name, s), y, name, s, black);
-    }
-    for (std::size_t r = 0; r < l.rows; ++r)
-        for (std::size_t c = 0; c < l.columns; ++c) {
-            const int x = l.left + static_cast<int>(c) * l.cell,
-                      y = l.top + static_cast<int>(r) * l.cell;
-            const Rgb colour = heat(cell_fraction(report, l, r, c));
-            image.fill(x, y, l.cell, l.cell, colour);
-            const std::size_t count = report.confusion_at(r, c);
-            const std::string text = std::to_string(count);
-            const int scale = l.cell >= 28 && text_width(text, 2) <= l.cell - 4 ? 2 : 1;
-            if (count && text_width(text, scale) <= l.cell - 2)
-                image.text(x + (l.cell - text_width(text, scale) + scale) / 2,
-                           y + (l.cell - kGlyphHeight * scale) / 2, text, scale,
-                           dark(colour) ? white : black);
-        }
-    // Grid lines, and a frame around the cells of the true class (the diagonal).
+    constexpr int kMargin = 8, kBarWidth = 200, kBarHeight = 12;
     const int matrix_w = static_cast<int>(l.columns) * l.cell,
               matrix_h = static_cast<int>(l.rows) * l.cell;
+    Image image(std::max(2 * kMargin + matrix_w + 1, 2 * kMargin + kBarWidth),
+                kMargin + matrix_h + 1 + 10 + kBarHeight + kMargin);
+    const Rgb grid{200, 200, 200}, accent{200, 30, 30};
+    const int left = kMargin, top = kMargin;
+    for (std::size_t r = 0; r < l.rows; ++r)
+        for (std::size_t c = 0; c < l.columns; ++c)
+            image.fill(left + static_cast<int>(c) * l.cell, top + static_cast<int>(r) * l.cell,
+                       l.cell, l.cell, heat(cell_fraction(report, l, r, c)));
+    // Grid lines, and a frame around the cells of the true class (the diagonal).
     for (std::size_t c = 0; c <= l.columns; ++c)
-        image.fill(l.left + static_cast<int>(c) * l.cell, l.top, 1, matrix_h + 1, grid);
+        image.fill(left + static_cast<int>(c) * l.cell, top, 1, matrix_h + 1, grid);
     for (std::size_t r = 0; r <= l.rows; ++r)
-        image.fill(l.left, l.top + static_cast<int>(r) * l.cell, matrix_w + 1, 1, grid);
+        image.fill(left, top + static_cast<int>(r) * l.cell, matrix_w + 1, 1, grid);
     for (std::size_t r = 0; r < l.rows; ++r) {
         const auto it = std::find(report.confusion_columns.begin(), report.confusion_columns.end(),
                                   report.confusion_rows[r]);
         if (it == report.confusion_columns.end()) continue;
-        const int x = l.left + static_cast<int>(it - report.confusion_columns.begin()) * l.cell,
-                  y = l.top + static_cast<int>(r) * l.cell;
+        const int x = left + static_cast<int>(it - report.confusion_columns.begin()) * l.cell,
+                  y = top + static_cast<int>(r) * l.cell;
         image.fill(x, y, l.cell + 1, 2, accent);
         image.fill(x, y + l.cell - 1, l.cell + 1, 2, accent);
         image.fill(x, y, 2, l.cell + 1, accent);
         image.fill(x + l.cell - 1, y, 2, l.cell + 1, accent);
     }
-    // Colour bar under the matrix: 0 % .. 100 % of a row.
-    const int bar_y = l.top + matrix_h + 12, bar_w = 200;
-    image.text(l.left, bar_y + 2, "0%", 2, black);
-    const int bar_x = l.left + text_width("0%", 2) + 6;
-    for (int i = 0; i < bar_w; ++i)
-        image.fill(bar_x + i, bar_y, 1, 18, heat(static_cast<double>(i) / (bar_w - 1)));
-    image.text(bar_x + bar_w + 6, bar_y + 2, "100%", 2, black);
+    // Colour bar under the matrix: 0 % (left) .. 100 % (right) of a row.
+    const int bar_y = top + matrix_h + 1 + 10;
+    for (int i = 0; i < kBarWidth; ++i)
+        image.fill(left + i, bar_y, 1, kBarHeight, heat(static_cast<double>(i) / (kBarWidth - 1)));
     return encode_png(image);
 }
 
@@ -443,7 +320,18 @@ std::string confusion_svg(const EvaluationReport& report, const ReportOptions& o
                   << "\" font-size=\"10\" text-anchor=\"middle\" fill=\""
                   << (dark(colour) ? "white" : "black") << "\">" << count << "</text>\n";
         }
-    o << "</svg>\n";
+    // Colour bar under the matrix: 0 % .. 100 % of a row.
+    const int bar_y = l.top + static_cast<int>(l.rows) * l.cell + 12;
+    o << "<defs><linearGradient id=\"confusion-scale\">";
+    for (int i = 0; i <= 4; ++i)
+        o << "<stop offset=\"" << i * 25 << "%\" stop-color=\"" << css(heat(i / 4.0)) << "\"/>";
+    o << "</linearGradient></defs>\n"
+      << "<text x=\"" << l.left << "\" y=\"" << bar_y + 13 << "\" font-size=\"12\">0 %</text>\n"
+      << "<rect x=\"" << l.left + 30 << "\" y=\"" << bar_y << "\" width=\"200\" height=\"18\" "
+      << "fill=\"url(#confusion-scale)\" stroke=\"#c8c8c8\"/>\n"
+      << "<text x=\"" << l.left + 236 << "\" y=\"" << bar_y + 13
+      << "\" font-size=\"12\">100 % of the row</text>\n"
+      << "</svg>\n";
     return o.str();
 }
 
@@ -533,6 +421,51 @@ std::string rank_curves_svg(const EvaluationReport& report, const ReportOptions&
     return o.str();
 }
 
+namespace {
+
+/// The file's folder and name ("bowl/view_003.pcd"), enough to tell the queries apart.
+std::string short_path(const std::string& file) {
+    const fs::path path(file);
+    const fs::path parent = path.parent_path().filename();
+    return parent.empty() ? path.filename().string() : (parent / path.filename()).string();
+}
+
+void gallery_picture(std::ostream& o, const GalleryPicture& p) {
+    o << "<figure>";
+    if (p.png.empty())
+        o << "<div class=\"nopic\"></div>";
+    else
+        o << "<img alt=\"" << xml_escape(p.caption) << "\" src=\"" << p.png << "\">";
+    o << "<figcaption>" << xml_escape(p.caption) << "</figcaption></figure>";
+}
+
+/// The misclassified queries: query, nearest view, nearest view of the true class.
+void gallery_html(std::ostream& o, const std::vector<GalleryEntry>& gallery) {
+    o << "<h2 id=\"misclassified\">Misclassified views</h2>\n<p>" << gallery.size()
+      << " queries whose nearest view has another class: the query (blue, shaded by depth), "
+         "the training view it was matched to, and the nearest view of its true class.</p>\n"
+      << "<div class=\"gallery\">\n";
+    for (const GalleryEntry& e : gallery) {
+        o << "<div class=\"entry\"><div class=\"pictures\">";
+        gallery_picture(o, e.query);
+        gallery_picture(o, e.matched);
+        gallery_picture(o, e.nearest_true);
+        o << "</div><p><b>" << xml_escape(e.true_class) << "</b> seen as <b>"
+          << xml_escape(e.predicted) << "</b> (rank "
+          << (e.rank ? std::to_string(e.rank) : std::string("&gt; k")) << ")<br>"
+          << xml_escape(short_path(e.file))
+          << "<br>nearest: " << xml_escape(e.matched_view.empty() ? "-" : e.matched_view)
+          << ", distance " << fixed(e.matched_distance, 4) << "<br>nearest "
+          << xml_escape(e.true_class) << ": " << xml_escape(e.true_view.empty() ? "-" : e.true_view)
+          << ", distance " << fixed(e.true_distance, 4);
+        if (!e.note.empty()) o << "<br><span class=\"note\">" << xml_escape(e.note) << "</span>";
+        o << "</p></div>\n";
+    }
+    o << "</div>\n";
+}
+
+}  // namespace
+
 std::string report_html(const EvaluationReport& r, const ReportOptions& options) {
     const std::string k = std::to_string(r.k);
     std::ostringstream o;
@@ -543,6 +476,11 @@ std::string report_html(const EvaluationReport& r, const ReportOptions& options)
       << "th,td{border:1px solid #ccc;padding:3px 10px;text-align:right}\n"
       << "th{background:#f0f0f0}td.name,th.name{text-align:left}\n"
       << "tr.mean td{font-weight:bold;border-top:2px solid #888}\n"
+      << ".gallery{display:flex;flex-wrap:wrap;gap:12px}\n"
+      << ".entry{border:1px solid #ccc;padding:6px;font-size:12px}\n"
+      << ".pictures{display:flex;gap:4px}figure{margin:0;text-align:center}\n"
+      << "img{image-rendering:pixelated}.nopic{width:160px;height:120px;background:#f4f4f4}\n"
+      << ".note{color:#a33}\n"
       << "</style>\n</head>\n<body>\n<h1>" << xml_escape(options.title) << "</h1>\n";
     o << "<table class=\"summary\">\n";
     auto row = [&](const std::string& name, const std::string& value) {
@@ -589,8 +527,8 @@ std::string report_html(const EvaluationReport& r, const ReportOptions& options)
         o << "</ul>\n";
     }
     o << "<h2>Rank curves</h2>\n" << rank_curves_svg(r, options);
-    o << "<h2>Confusion matrix</h2>\n<p><img alt=\"confusion matrix\" src=\"data:image/png;base64,"
-      << base64(confusion_png(r, options)) << "\"></p>\n";
+    o << "<h2>Confusion matrix</h2>\n" << confusion_svg(r, options);
+    if (!options.gallery.empty()) gallery_html(o, options.gallery);
     if (!r.failures.empty()) {
         o << "<h2>Failed queries</h2>\n<table>\n<tr><th class=\"name\">file</th>"
           << "<th class=\"name\">class</th><th class=\"name\">error</th></tr>\n";

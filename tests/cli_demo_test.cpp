@@ -97,8 +97,13 @@ TEST_F(CliDemoTest, SmallRunAsTextWithReportAndWorkFolder) {
                              "[4/4] scene", "placed objects found", "total"})
         EXPECT_NE(run.out.find(text), std::string::npos) << text << "\n" << run.out;
     for (const char* file : {"index.html", "report.json", "confusion.png", "rank_curves.svg",
-                             "demo.json", "scene.pcd", "scene_depth.png"})
+                             "demo.json", "scene.html", "scene.pcd", "scene_depth.png"})
         EXPECT_TRUE(fs::exists(report / file)) << file;
+    // The scene page: the frame with an outline and a label per recognised object.
+    const std::string page = read_text(report / "scene.html");
+    EXPECT_NE(page.find("<image width="), std::string::npos);
+    EXPECT_NE(page.find("<polygon"), std::string::npos);
+    EXPECT_NE(page.find("<tr class=\"object\">"), std::string::npos);
     const nlohmann::json demo = nlohmann::json::parse(read_text(report / "demo.json"));
     EXPECT_EQ(demo["table"].size(), 10u);
     // The work folder keeps the models and the database.

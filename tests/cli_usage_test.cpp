@@ -60,6 +60,14 @@ TEST_F(CliUsageTest, ParserErrorsAreOneLineAndExitOne) {
     expect_usage_error("describe x.pcd --threads -1", "--threads");
     expect_usage_error("describe x.pcd --format xml", "xml");
     expect_usage_error("describe x.pcd --no-such-option", "--no-such-option");
+    // Training views are drawn from the meshes only on report pages.
+    expect_usage_error(
+        "scene " + quoted(db) + " " + quoted(cloud) + " --meshes " + quoted(dir_.string()),
+        "--meshes needs --report DIR");
+    expect_usage_error(
+        "eval --synthetic " + quoted(db) + " --report r --meshes " + quoted(dir_.string()),
+        "--meshes needs a TESTSET.csv and --report DIR");
+    expect_usage_error("eval " + quoted(db) + " " + quoted(cloud) + " --gallery -2", "--gallery");
 }
 
 TEST_F(CliUsageTest, RuntimeErrorsExitTwo) {

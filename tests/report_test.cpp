@@ -165,9 +165,41 @@ TEST_F(ReportTest, WritesAllFiles) {
                         "<td class=\"name\">bowl (1)</td>"),
               std::string::npos)
         << html;
-    EXPECT_NE(html.find("data:image/png;base64,iVBORw0KGgo"), std::string::npos);
+    // Both figures inline as SVG, their labels as text: no picture of text.
     EXPECT_NE(html.find("<svg"), std::string::npos);
+    EXPECT_NE(html.find("mug -&gt; bowl: 1 (33.3 %)"), std::string::npos);
+    EXPECT_EQ(html.find("data:image/png"), std::string::npos);
+    EXPECT_EQ(html.find("Misclassified views"), std::string::npos);  // no gallery given
     EXPECT_NE(html.find("chair: 1"), std::string::npos);
+}
+
+TEST_F(ReportTest, GalleryShowsEachEntryWithItsPicturesAndDistances) {
+    esf::ReportOptions options;
+    esf::GalleryEntry e;
+    e.file = "/data/bowl_3.pcd";
+    e.true_class = "bowl";
+    e.predicted = "mug";
+    e.matched_view = "mug_1 #12";
+    e.matched_distance = 0.25;
+    e.true_view = "bowl_2 #4";
+    e.true_distance = 0.3125;
+    e.rank = 2;
+    e.query = {"data:image/png;base64,AAAA", "query: bowl"};
+    e.matched = {"data:image/png;base64,BBBB", "nearest: mug"};
+    e.nearest_true = {"", "nearest bowl"};
+    e.note = "bowl_2: mesh <missing>";
+    options.gallery = {e};
+    const std::string html = esf::report_html(sample_report(), options);
+    EXPECT_NE(html.find("Misclassified views"), std::string::npos);
+    EXPECT_NE(html.find("src=\"data:image/png;base64,AAAA\""), std::string::npos);
+    EXPECT_NE(html.find("src=\"data:image/png;base64,BBBB\""), std::string::npos);
+    EXPECT_NE(html.find("<div class=\"nopic\"></div><figcaption>nearest bowl"), std::string::npos);
+    EXPECT_NE(html.find(">data/bowl_3.pcd<"), std::string::npos);  // folder and name
+    EXPECT_EQ(html.find("/data/bowl_3.pcd"), std::string::npos);
+    EXPECT_NE(html.find("mug_1 #12, distance 0.2500"), std::string::npos);
+    EXPECT_NE(html.find("bowl_2 #4, distance 0.3125"), std::string::npos);
+    EXPECT_NE(html.find("(rank 2)"), std::string::npos);
+    EXPECT_NE(html.find("mesh &lt;missing&gt;"), std::string::npos);
 }
 
 TEST_F(ReportTest, OutputIsDeterministic) {

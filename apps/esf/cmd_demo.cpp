@@ -18,6 +18,7 @@
 #include "esf/demo.hpp"
 #include "esf/depth_image.hpp"
 #include "esf/report.hpp"
+#include "esf/scene_page.hpp"
 #include "esf/view_sphere.hpp"
 
 namespace esf::cli {
@@ -295,6 +296,10 @@ void write_demo_report(const std::string& dir, const DemoResult& r, const nlohma
                                   ? static_cast<std::uint16_t>(std::lround(p.z() * 1000.0f))
                                   : std::uint16_t{0});
     write_depth_png((root / "scene_depth.png").string(), depth);
+    ScenePageOptions page;
+    page.title = "esf demo scene";
+    write_page(dir, "scene.html",
+               scene_page_html("generated scene", r.scene.cloud, r.scene.recognition, {}, page));
 }
 
 void run_demo_command(const DemoArgs& args) {
@@ -324,7 +329,7 @@ void run_demo_command(const DemoArgs& args) {
                     r.seconds.scene);
         if (!args.report.empty())
             std::printf(
-                "report: %s/index.html (report.json, demo.json, scene.pcd, "
+                "report: %s/index.html (report.json, demo.json, scene.html, scene.pcd, "
                 "scene_depth.png)\n",
                 args.report.c_str());
     }
@@ -372,7 +377,8 @@ void add_demo_command(CLI::App& app) {
         ->check(CLI::Range(0, 10));
     cmd->add_option("--report", args->report,
                     "Write DIR/index.html, report.json, confusion.png/svg, rank_curves.svg (the "
-                    "held-out evaluation), demo.json (as --json), scene.pcd (labelled) and "
+                    "held-out evaluation), demo.json (as --json), scene.html (the scene's page: "
+                    "frame, outlined objects, classes), scene.pcd (labelled) and "
                     "scene_depth.png (16-bit, mm)");
     cmd->add_option("--work", o.work_dir,
                     "Keep the generated models and the database in this folder (default: a "

@@ -19,6 +19,7 @@
 #include "esf/report.hpp"
 #include "esf/scene_evaluation.hpp"
 #include "esf/scene_report.hpp"
+#include "esf/view_pictures.hpp"
 
 namespace esf::cli {
 
@@ -37,6 +38,8 @@ struct EvalArgs {
     std::string groups;
     std::size_t max_queries = 0;
     std::string report;
+    int gallery = -1;
+    std::string meshes;
     std::string title;
     bool json = false;
     std::string scenes;
@@ -160,7 +163,10 @@ void run_eval(const EvalArgs& args) {
     if (!args.synthetic && args.max_queries)
         throw CLI::ValidationError("--max-queries", "--max-queries needs --synthetic");
 
+    if (!args.meshes.empty() && (args.synthetic || args.report.empty()))
+        throw CLI::ValidationError("--meshes", "--meshes needs a TESTSET.csv and --report DIR");
     EvaluationReport report;
+    std::vector<GalleryEntry> gallery;
     if (args.synthetic) {
         const Database db(args.database, OpenMode::kRead);
         const DescriptorMatrix matrix = db.load_descriptors(args.descriptor);
@@ -208,11 +214,22 @@ void run_eval(const EvalArgs& args) {
         progress.finish();
         for (const QueryFailure& f : report.failures)
             std::fprintf(stderr, "esf: warning: %s\n", with_file(f.file, f.error).c_str());
+        if (!args.report.empty() && args.gallery != 0) {
+            std::unique_ptr<ViewRenderer> views;
+            if (!args.meshes.empty())
+                views = std::make_unique<ViewRenderer>(args.database, args.meshes);
+            GalleryOptions gallery_options;
+            gallery_options.per_class =
+                args.gallery < 0 ? 0 : static_cast<std::size_t>(args.gallery);
+            gallery_options.views = views.get();
+            gallery = misclassified_gallery(recognizer, report, gallery_options);
+        }
     }
 
     if (!args.report.empty()) {
         ReportOptions options;
         options.title = args.title.empty() ? "esf eval: " + args.database : args.title;
+        options.gallery = std::move(gallery);
         const ReportFiles files = write_report(args.report, report, options);
         if (!args.json) std::printf("report: %s\n", files.html.c_str());
     }
@@ -263,7 +280,11 @@ void add_eval_command(CLI::App& app) {
         "rank_curve, ...}, classes: [{class, samples, top1, top10, confused_with, ...}],\n"
         "confusion, skipped, missing_classes, failed, failures, timings}, fractions in [0, 1];\n"
         "top10 and class_top10 hold the top-k values for any -k. --report DIR writes\n"
-        "report.json, confusion.png/.svg, rank_curves.svg and a self-contained index.html.\n"
+        "report.json, confusion.png (cells only) and .svg (with labels), rank_curves.svg and a\n"
+        "self-contained index.html; for a test set the page also shows the misclassified\n"
+        "queries (--gallery N: the first N per class), each drawn next to the training view it\n"
+        "was matched to and the nearest view of its true class (drawn from the meshes given\n"
+        "by --meshes ROOT, the folder DB was trained from).\n"
         "Exit status 2 when no sample could be evaluated.");
     cmd->add_option("database", args->database, "Training database (esf train ... -o DB)")
         ->required()
@@ -300,6 +321,15 @@ void add_eval_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--report", args->report,
                     "Write report.json, confusion.png/.svg, rank_curves.svg, index.html to DIR");
+    cmd->add_option("--gallery", args->gallery,
+                    "With --report and a test set: misclassified queries shown per class "
+                    "(-1 = all, 0 = none)")
+        ->check(CLI::Range(-1, 1000000))
+        ->capture_default_str();
+    cmd->add_option("--meshes", args->meshes,
+                    "With --report: the training root DB was trained from; the gallery draws "
+                    "training views from its meshes")
+        ->check(CLI::ExistingDirectory);
     cmd->add_option("--scenes", args->scenes,
                     "Evaluate segmentation and recognition on labelled scenes (CSV: scene_file, "
                     "object_id, class[, scene_type])")

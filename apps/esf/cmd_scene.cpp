@@ -1,7 +1,9 @@
 // esf scene DB SCENE... : segment table scenes and classify every object on the table.
 
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -13,7 +15,9 @@
 #include "cli_scene.hpp"
 #include "commands.hpp"
 #include "esf/recognizer.hpp"
+#include "esf/scene_page.hpp"
 #include "esf/segmentation.hpp"
+#include "esf/view_pictures.hpp"
 
 namespace esf::cli {
 
@@ -24,6 +28,8 @@ struct SceneArgs {
     SceneInputArgs input;
     std::vector<std::string> scenes;
     bool json = false;
+    std::string report;
+    std::string meshes;
 };
 
 using Clock = std::chrono::steady_clock;
@@ -107,14 +113,58 @@ void print_scene(const std::string& file, const SceneRecognition& scene, double 
     }
 }
 
+/// "scene_007_mosd_learn0.html": the scene's number and its file name, letters, digits, '-'
+/// and '_' only.
+std::string page_name(std::size_t index, const std::string& file) {
+    std::string stem = std::filesystem::path(file).stem().string();
+    for (char& c : stem)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+    char number[16];
+    std::snprintf(number, sizeof number, "%03zu", index);
+    return "scene_" + std::string(number) + "_" + stem + ".html";
+}
+
+/// The nearest training view of each classified object, drawn from its mesh when the meshes
+/// are known.
+std::vector<MatchedView> matched_views(const SceneRecognition& scene, ViewRenderer* views) {
+    std::vector<MatchedView> out(scene.objects.size());
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const RecognizedObject& o = scene.objects[i];
+        if (!o.classified()) continue;
+        if (!views) {
+            out[i].note = "training views are drawn with --meshes ROOT";
+            continue;
+        }
+        try {
+            const Classification& c = o.classification;
+            out[i].points = views->render(c.class_name, c.best_model, c.pose);
+            if (out[i].points.empty()) out[i].note = "the view has no points";
+        } catch (const std::exception& e) {
+            out[i].note = e.what();
+        }
+    }
+    return out;
+}
+
 void run_scene(SceneArgs& args) {
+    if (!args.meshes.empty() && args.report.empty())
+        throw CLI::ValidationError("--meshes", "--meshes needs --report DIR");
     SegmentationOptions segmentation = segmentation_options(args.input);
     segmentation.threads = args.recognizer.options.threads;
     const Recognizer recognizer(args.recognizer.database, recognizer_options(args.recognizer));
 
+    std::unique_ptr<ViewRenderer> views;
+    if (!args.meshes.empty())
+        views = std::make_unique<ViewRenderer>(args.recognizer.database, args.meshes);
+    std::vector<ScenePageLink> links;
+    ScenePageOptions page_options;
+    page_options.plane_distance = segmentation.plane_distance;
+
     int failed = 0;
     nlohmann::json all = nlohmann::json::array();
     for (const std::string& file : args.scenes) {
+        ScenePageLink link;
+        link.file = file;
         try {
             const PointCloud cloud = load_scene_cloud(file, args.input);
             auto start = Clock::now();
@@ -127,11 +177,28 @@ void run_scene(SceneArgs& args) {
                 all.push_back(scene_json(file, scene, segment_ms, recognise_ms));
             else
                 print_scene(file, scene, segment_ms, recognise_ms);
+            if (!args.report.empty()) {
+                const std::vector<MatchedView> matched = matched_views(scene, views.get());
+                const std::string name = page_name(links.size(), file);
+                write_page(args.report, name,
+                           scene_page_html(file, cloud, scene, matched, page_options));
+                link.page = name;
+                link.message = scene.message;
+                for (const RecognizedObject& o : scene.objects)
+                    link.classes.push_back(o.classified() ? o.classification.class_name : "-");
+            }
         } catch (const std::exception& e) {
             std::fprintf(stderr, "esf: error: %s\n", with_file(file, e.what()).c_str());
+            link.error = e.what();
             ++failed;
         }
+        links.push_back(std::move(link));
         std::fflush(stdout);
+    }
+    if (!args.report.empty()) {
+        const std::string index =
+            write_page(args.report, "index.html", scene_index_html(links, "esf scene"));
+        if (!args.json) std::printf("report: %s\n", index.c_str());
     }
     if (args.json)
         std::cout << (args.scenes.size() == 1 && all.size() == 1 ? all[0] : all).dump(2) << '\n';
@@ -156,13 +223,23 @@ void add_scene_command(CLI::App& app) {
         "distance, pose, centroid, size, points, status, message, neighbours}]} (an array for\n"
         "several scenes; poses model -> camera, 16 numbers row-major; size = length, width,\n"
         "height). A scene that cannot be read is reported on stderr, the others go on, and the\n"
-        "exit status is then 2; a scene without plane or objects says so.");
+        "exit status is then 2; a scene without plane or objects says so. --report DIR writes\n"
+        "a self-contained page per scene and DIR/index.html linking them: the frame shaded by\n"
+        "depth with the table in green and every object outlined and labelled, then each object\n"
+        "drawn next to its nearest training view (drawn from the meshes under --meshes ROOT,\n"
+        "the folder DB was trained from).");
     add_recognizer_options(*cmd, args->recognizer);
     cmd->add_option("scenes", args->scenes,
                     "Scenes: point clouds (.pcd, .ply, .xyz), organised or not, or 16-bit depth "
                     "PNGs")
         ->required();
     cmd->add_flag("--json", args->json, "Print JSON instead of the tables");
+    cmd->add_option("--report", args->report,
+                    "Write a page per scene and index.html into DIR (created when missing)");
+    cmd->add_option("--meshes", args->meshes,
+                    "With --report: the training root DB was trained from, to draw the matched "
+                    "training views")
+        ->check(CLI::ExistingDirectory);
     add_depth_png_options(*cmd, args->input);
     add_segmentation_options(*cmd, args->input);
     cmd->callback([args] { run_scene(*args); });

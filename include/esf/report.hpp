@@ -2,18 +2,22 @@
 // Evaluation reports for people and programs: one folder per evaluation holding
 //
 //   report.json       every number of the EvaluationReport (machine-readable; see report_json)
-//   confusion.png     the confusion matrix as a heat map (row-normalised, class labels drawn
-//                     with a built-in 5x7 bitmap font), rows = true class, columns = 1-NN class
-//   confusion.svg     the same as vector graphics
+//   confusion.png     the confusion matrix as a bare heat map without text (row-normalised,
+//                     one square cell per pair, rows = true class, columns = 1-NN class, the
+//                     diagonal framed in red), for programs that want a raster
+//   confusion.svg     the confusion matrix with its class labels and counts as real text
 //   rank_curves.svg   accuracy vs rank 1..k, one curve per class and the mean (thick), as the
 //                     paper's Figs. 15-18
 //   index.html        self-contained: the summary, the per-class table (the paper's Table I),
-//                     the SVGs inline and the PNG as a data URI
+//                     the SVGs inline, and the gallery of misclassified queries when
+//                     ReportOptions::gallery has entries (pictures as PNG data URIs, captions
+//                     as text)
 //
 // Files are written to a temporary name beside their target and renamed, so a failure leaves
 // no partial file. The output depends only on the report and the options (no dates, no paths
 // other than those in the report), so equal reports give equal files.
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -22,9 +26,32 @@
 
 namespace esf {
 
+/// One picture of the gallery: a PNG data URI (esf/point_picture.hpp) and what it shows; an
+/// empty `png` is drawn as an empty frame with `caption` saying why.
+struct GalleryPicture {
+    std::string png;
+    std::string caption;
+};
+
+/// A misclassified query next to the view it was matched to and the nearest view of its class.
+struct GalleryEntry {
+    std::string file;
+    std::string true_class;
+    std::string predicted;     ///< class of the nearest view
+    std::string matched_view;  ///< "model #view" of the nearest view
+    double matched_distance = 0.0;
+    std::string true_view;       ///< "model #view" of the nearest view of the true class
+    double true_distance = 0.0;  ///< its distance (>= matched_distance)
+    std::size_t rank = 0;        ///< the query's rank (0: true class not among the k nearest)
+    GalleryPicture query, matched, nearest_true;
+    std::string note;  ///< why something is missing; empty when all is there
+};
+
 struct ReportOptions {
     std::string title = "esf evaluation";  ///< heading of the HTML page and the figures
     bool include_queries = true;           ///< per-query lines in report.json
+    /// Shown in index.html under "Misclassified views" (see esf/view_pictures.hpp).
+    std::vector<GalleryEntry> gallery;
 };
 
 /// What write_report() wrote (full paths).
@@ -51,7 +78,7 @@ ReportFiles write_report(const std::string& dir, const EvaluationReport& report,
 /// "distance"}]}. "top10" and "class_top10" hold the top-k values whatever k is.
 std::string report_json(const EvaluationReport& report, const ReportOptions& options = {});
 
-/// The confusion heat map as PNG bytes (8-bit RGB).
+/// The confusion heat map as PNG bytes (8-bit RGB), without any text.
 std::vector<std::uint8_t> confusion_png(const EvaluationReport& report,
                                         const ReportOptions& options = {});
 /// The confusion matrix as an SVG document.
