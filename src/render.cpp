@@ -459,7 +459,7 @@ std::size_t MeshRenderer::view_count() const { return impl_->kept.size(); }
 int MeshRenderer::view_index(std::size_t index) const {
     if (index >= impl_->kept.size())
         throw std::invalid_argument("view index " + std::to_string(index) + " out of range (" +
-                                std::to_string(impl_->kept.size()) + " views)");
+                                    std::to_string(impl_->kept.size()) + " views)");
     return impl_->kept[index];
 }
 
