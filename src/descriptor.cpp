@@ -341,7 +341,10 @@ DescriptorInfo descriptor_info(const std::string& name) {
 
 int stored_descriptor_version(const std::string& name) { return descriptor_info(name).version; }
 
-int descriptor_sketch_group(const std::string& name) { return descriptor_info(name).sketch_group; }
+int descriptor_sketch_group(const std::string& name) {
+    const bool known = std::find(kNames.begin(), kNames.end(), name) != kNames.end();
+    return known ? descriptor_info(name).sketch_group : 0;  // another kind: the index's default
+}
 
 std::vector<std::size_t> descriptor_blocks(const DescriptorInfo& info) {
     if (info.blocks.empty()) return {static_cast<std::size_t>(info.dimension)};

@@ -87,8 +87,9 @@ struct DescriptorInfo {
     int sketch_group = 0;
 };
 
-/// descriptor_info(name).version and .sketch_group.
+/// descriptor_info(name).version (throws for an unknown name).
 int stored_descriptor_version(const std::string& name);
+/// descriptor_info(name).sketch_group; 0 for a name the registry does not know.
 int descriptor_sketch_group(const std::string& name);
 
 /// What make_descriptor(name) computes, without computing anything. Throws like make_descriptor.
