@@ -111,6 +111,8 @@ void run_scene(SceneArgs& args) {
     SegmentationOptions segmentation = segmentation_options(args.input);
     segmentation.threads = args.recognizer.options.threads;
     const Recognizer recognizer(args.recognizer.database, recognizer_options(args.recognizer));
+    if (!args.recognizer.no_weights)
+        warn_if_weights_stale(args.recognizer.database, recognizer.info().setup.kind.name);
 
     int failed = 0;
     nlohmann::json all = nlohmann::json::array();

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <stdexcept>
+#include <string>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
@@ -32,8 +33,13 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        const int code = app.exit(e);  // prints help, version or the usage error
-        return code == 0 ? 0 : esf::cli::kExitUsage;
+        if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+        // A usage error is one line, like every other error.
+        std::string message = e.what();
+        for (char& c : message)
+            if (c == '\n') c = ' ';
+        std::fprintf(stderr, "esf: error: %s\n", message.c_str());
+        return esf::cli::kExitUsage;
     } catch (const esf::cli::ExitStatus& status) {
         return status.code;
     } catch (const std::invalid_argument& e) {
