@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages esf builds against, when any is missing.
+# Installs the Debian 12 packages esf builds against, when any is missing. With the argument
+# `fuzz`, also Debian's clang 16 and its libFuzzer (for make fuzz).
 set -euo pipefail
 packages=(
     build-essential cmake pkg-config clang-format
@@ -7,6 +8,9 @@ packages=(
     libcli11-dev libsqlite3-dev libpng-dev libfmt-dev nlohmann-json3-dev
     libgtest-dev libgmock-dev libbenchmark-dev
 )
+if [ "${1:-}" = fuzz ]; then
+    packages+=(clang-16 libclang-rt-16-dev)
+fi
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
