@@ -334,9 +334,9 @@ void check_off(const std::string& path, std::uintmax_t file_size) {
 }
 
 /// Assimp's file access for one model: regular files in the model's folder or below it (the
-/// folder as named, or the one a symbolic link to the model leads to). Anything else (a material
-/// library or glTF buffer outside the folder, a FIFO, a device) does not exist for Assimp, so it
-/// is neither opened nor quoted in a message.
+/// folder as named, with its links resolved, or the one a symbolic link to the model leads to).
+/// Anything else (a material library or glTF buffer outside the folder, a FIFO, a device) does not
+/// exist for Assimp, so it is neither opened nor quoted in a message.
 class FolderIOSystem : public Assimp::DefaultIOSystem {
   public:
     explicit FolderIOSystem(const std::string& model) {
@@ -344,6 +344,8 @@ class FolderIOSystem : public Assimp::DefaultIOSystem {
         std::error_code ec;
         const fs::path given = fs::absolute(fs::path(model), ec).lexically_normal();
         folders_.push_back(given.parent_path());
+        const fs::path folder = fs::canonical(given.parent_path(), ec);
+        if (!ec) folders_.push_back(folder);
         const fs::path real = fs::canonical(given, ec);
         if (!ec) folders_.push_back(real.parent_path());
     }
