@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -348,6 +349,48 @@ TEST_F(MeshTest, PlyListLengthsAreCheckedBeforeAssimp) {
     EXPECT_EQ(esf::load_mesh(write("good.ply", header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"))
                   .triangles.size(),
               1u);
+}
+
+TEST_F(MeshTest, APlyMeshCutShortIsAnErrorWhereverItIsCut) {
+    // A 6 x 6 vertex grid, 50 triangles, binary (written by esf) and ASCII. Cut at 30 % to 99 %
+    // of its length, Assimp aborted (30-60 %) or returned a part of the mesh (75-99 %).
+    esf::Mesh grid;
+    for (int y = 0; y < 6; ++y)
+        for (int x = 0; x < 6; ++x)
+            grid.vertices.emplace_back(static_cast<float>(x), static_cast<float>(y), 0.0f);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x) {
+            const int i = 6 * y + x;
+            grid.triangles.emplace_back(i, i + 1, i + 7);
+            grid.triangles.emplace_back(i, i + 7, i + 6);
+        }
+    const std::string binary_path = (dir_ / "grid.ply").string();
+    esf::write_ply_mesh(binary_path, grid);
+    std::ifstream in(binary_path, std::ios::binary);
+    const std::string binary((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+    std::string ascii =
+        "ply\nformat ascii 1.0\nelement vertex 36\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 50\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const auto& v : grid.vertices)
+        ascii += std::to_string(v.x()) + " " + std::to_string(v.y()) + " 0\n";
+    for (const auto& t : grid.triangles)
+        ascii += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " +
+                 std::to_string(t[2]) + "\n";
+    EXPECT_EQ(esf::load_mesh(write("whole_ascii.ply", ascii)).triangles.size(), 50u);
+    EXPECT_EQ(esf::load_mesh(binary_path).triangles.size(), 50u);
+    for (const double fraction : {0.3, 0.45, 0.6, 0.75, 0.9, 0.99}) {
+        const auto cut = [fraction](const std::string& text) {
+            return text.substr(
+                0, static_cast<std::size_t>(fraction * static_cast<double>(text.size())));
+        };
+        const std::string b = write("cut.ply", cut(binary));
+        EXPECT_THROW(esf::load_mesh(b), esf::IoError) << fraction;
+        // ASCII cut inside the last line it keeps: that line may still read as whole, the
+        // lines after it are missing.
+        const std::string a = write("cut_ascii.ply", cut(ascii));
+        EXPECT_THROW(esf::load_mesh(a), esf::IoError) << fraction;
+    }
 }
 
 TEST_F(MeshTest, NoFileOutsideTheModelsFolderIsOpened) {
