@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages esf builds against, when any is missing (chromium: the
-# browser test of the report pages, ctest browser_pages).
+# browser test of the report pages, ctest browser_pages). With the argument `fuzz`, also
+# Debian's clang 16 and its libFuzzer (for make fuzz).
 set -euo pipefail
 packages=(
     build-essential cmake pkg-config clang-format
@@ -10,6 +11,9 @@ packages=(
     python3-dev pybind11-dev python3-numpy python3-pytest python3-venv
     chromium
 )
+if [ "${1:-}" = fuzz ]; then
+    packages+=(clang-16 libclang-rt-16-dev)
+fi
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

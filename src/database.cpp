@@ -1,10 +1,14 @@
 #include "esf/database.hpp"
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -78,6 +82,36 @@ CREATE TABLE weights(
     kind_id INTEGER PRIMARY KEY REFERENCES descriptor_kinds(id),
     data BLOB NOT NULL);
 )sql";
+
+// What stored weights were learned on (Database::content_fingerprint). Not in kTables: files
+// written before it existed lack it, and a writer adds it.
+constexpr const char* kWeightsBasis = R"sql(
+CREATE TABLE IF NOT EXISTS weights_basis(
+    kind_id INTEGER PRIMARY KEY REFERENCES descriptor_kinds(id),
+    fingerprint TEXT NOT NULL);
+)sql";
+
+/// FNV-1a, 64 bits: a content fingerprint, not a security measure.
+class Fnv1a {
+  public:
+    void add(const std::string& text) {
+        for (const char c : text) byte(static_cast<unsigned char>(c));
+        byte(0);  // a separator, so that ("ab", "c") and ("a", "bc") differ
+    }
+    std::string hex() const {
+        static constexpr char kDigits[] = "0123456789abcdef";
+        std::string out(16, '0');
+        for (int i = 0; i < 16; ++i) out[15 - i] = kDigits[(hash_ >> (4 * i)) & 0xf];
+        return out;
+    }
+
+  private:
+    void byte(unsigned char b) {
+        hash_ ^= b;
+        hash_ *= 0x100000001b3ull;
+    }
+    std::uint64_t hash_ = 0xcbf29ce484222325ull;
+};
 
 constexpr std::array<const char*, 7> kTables = {
     "settings", "categories", "models", "views", "descriptor_kinds", "descriptors", "weights"};
@@ -262,11 +296,14 @@ struct Database::Impl {
     OpenMode mode;
     sqlite3* db = nullptr;
     bool wal = false;  ///< this writer switched the file to write-ahead logging
+    int lock_fd = -1;  ///< a writer's flock() on the file: one writer at a time
 
     Impl(std::string p, OpenMode m) : path(std::move(p)), mode(m) {}
     ~Impl() {
         if (db && wal) sqlite3_exec(db, "PRAGMA journal_mode = DELETE", nullptr, nullptr, nullptr);
         sqlite3_close_v2(db);
+        // Closed after SQLite: closing a descriptor of the file drops the process's fcntl locks.
+        if (lock_fd >= 0) ::close(lock_fd);
     }
 
     [[noreturn]] void fail(const std::string& reason) const {
@@ -316,16 +353,70 @@ struct Database::Impl {
         fail(sqlite3_errmsg(db));
     }
 
+    /// One writer at a time: an exclusive flock() on the file, held until the writer closes.
+    /// (SQLite's own locks last one transaction, so two trainings would interleave models and
+    /// race to create the schema.) Readers take no lock and are never refused.
+    void lock_for_writing() {
+        if (sqlite3_db_readonly(db, "main") == 1) fail("cannot write: the file is read-only");
+        lock_fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        if (lock_fd < 0) fail(std::string("cannot open for locking: ") + std::strerror(errno));
+        if (::flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+            const int error = errno;
+            ::close(lock_fd);
+            lock_fd = -1;
+            if (error == EWOULDBLOCK) fail("database is in use by another training");
+            fail(std::string("cannot lock: ") + std::strerror(error));
+        }
+    }
+
     void open() {
         connect(mode == OpenMode::kWrite ? SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE
                                          : SQLITE_OPEN_READONLY);
+        if (mode == OpenMode::kWrite) lock_for_writing();
         first_read();
         check_schema();  // before any change: a file that is not ours is left untouched
         exec("PRAGMA foreign_keys = ON");
         if (mode == OpenMode::kWrite) {
             exec(kWriterPragmas);
             wal = true;
+            exec(kWeightsBasis);
         }
+    }
+
+    bool has_table(const char* name) const {
+        Statement s = prepare("SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = ?");
+        s.bind(1, std::string(name));
+        return s.step();
+    }
+
+    /// See Database::content_fingerprint().
+    std::string fingerprint(std::int64_t kind_id) const {
+        Statement s = prepare(
+            "SELECT c.name, m.name, m.scale,"
+            " (SELECT count(*) FROM descriptors d JOIN views v ON v.id = d.view_id"
+            "  WHERE v.model_id = m.id AND d.kind_id = ?)"
+            " FROM models m JOIN categories c ON c.id = m.category_id"
+            " WHERE m.status = 'complete' ORDER BY c.name, m.name");
+        s.bind(1, kind_id);
+        Fnv1a hash;
+        while (s.step()) {
+            hash.add(s.text(0));
+            hash.add(s.text(1));
+            std::ostringstream scale;
+            scale.precision(17);
+            scale << s.real(2);
+            hash.add(scale.str());
+            hash.add(std::to_string(s.int64(3)));
+        }
+        return hash.hex();
+    }
+
+    /// The fingerprint stored with the weights of `kind_id`; empty when there is none.
+    std::string weights_basis(std::int64_t kind_id) const {
+        if (!has_table("weights_basis")) return {};
+        Statement s = prepare("SELECT fingerprint FROM weights_basis WHERE kind_id = ?");
+        s.bind(1, kind_id);
+        return s.step() ? s.text(0) : std::string();
     }
 
     void check_schema() {
@@ -721,23 +812,49 @@ DescriptorMatrix Database::load_descriptors(const std::string& descriptor) const
     return out;
 }
 
-void Database::set_weights(std::span<const float> weights, const std::string& descriptor) {
+std::string Database::content_fingerprint(const std::string& descriptor) const {
+    return impl_->fingerprint(impl_->kind(descriptor).first);
+}
+
+void Database::set_weights(std::span<const float> weights, const std::string& descriptor,
+                           const std::string& learned_on) {
     impl_->require_writable();
     if (weights.empty()) throw std::invalid_argument("weights are empty");
-    if (!all_finite(weights)) throw std::invalid_argument("weights hold a non-finite value");
+    for (std::size_t i = 0; i < weights.size(); ++i)
+        if (!(std::isfinite(weights[i]) && weights[i] > 0.0f))
+            throw std::invalid_argument("weight " + std::to_string(i) + " is " +
+                                        std::to_string(weights[i]) +
+                                        ": weights must be positive and finite");
     const auto kind_id = impl_->kind(descriptor).first;
     impl_->transaction([&] {
+        const std::string fingerprint = impl_->fingerprint(kind_id);
+        if (!learned_on.empty() && learned_on != fingerprint)
+            impl_->fail("the database changed while its weights were learned; learn them again");
         Statement s = impl_->prepare("INSERT OR REPLACE INTO weights(kind_id, data) VALUES (?, ?)");
         s.bind(1, kind_id).bind_blob(2, weights).run();
+        Statement b = impl_->prepare(
+            "INSERT OR REPLACE INTO weights_basis(kind_id, fingerprint) VALUES (?, ?)");
+        b.bind(1, kind_id).bind(2, fingerprint).run();
     });
 }
 
-std::optional<std::vector<float>> Database::weights(const std::string& descriptor) const {
+std::optional<std::vector<float>> Database::stored_weights(const std::string& descriptor) const {
     const auto kind_id = impl_->kind(descriptor).first;
     Statement s = impl_->prepare("SELECT data FROM weights WHERE kind_id = ?");
     s.bind(1, kind_id);
     if (!s.step()) return std::nullopt;
     return s.floats(0);
+}
+
+bool Database::weights_are_stale(const std::string& descriptor) const {
+    const auto kind_id = impl_->kind(descriptor).first;
+    if (!stored_weights(descriptor)) return false;
+    return impl_->weights_basis(kind_id) != impl_->fingerprint(kind_id);
+}
+
+std::optional<std::vector<float>> Database::weights(const std::string& descriptor) const {
+    if (weights_are_stale(descriptor)) return std::nullopt;
+    return stored_weights(descriptor);
 }
 
 }  // namespace esf

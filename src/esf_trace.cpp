@@ -242,6 +242,19 @@ void sort_lines(std::span<const std::uint32_t> starts, std::span<const std::uint
             starts[i] | std::uint64_t{ends[i]} << kEndShift | std::uint64_t{i} << kLineShift;
 }
 
+/// Entries 16 J .. 16 J + 15 of a row of the cube table from its four byte planes. J is a
+/// template argument because the lane of _mm512_extracti32x4_epi32 must be an immediate, which a
+/// loop counter is not in every build (sanitizer builds do not unroll the loop).
+template <int J>
+ESF_TARGET_AVX512 inline __m512i cube_entry(const __m512i (&plane)[4]) {
+    __m512i entry = _mm512_setzero_si512();
+    for (int p = 0; p < 4; ++p)
+        entry = _mm512_or_si512(
+            entry, _mm512_slli_epi32(_mm512_cvtepu8_epi32(_mm512_extracti32x4_epi32(plane[p], J)),
+                                     static_cast<unsigned>(8 * p)));
+    return entry;
+}
+
 /// Fills the cube table for `grid`. Rows of 64 entries whose cells are all empty are zero;
 /// `dirty` marks the rows that are not, so a later grid clears only those.
 ESF_TARGET_AVX512 void build_cubes(const VoxelGrid& grid, TraceScratch& scratch) {
@@ -281,15 +294,10 @@ ESF_TARGET_AVX512 void build_cubes(const VoxelGrid& grid, TraceScratch& scratch)
                         _mm512_or_si512(plane[k / 8], _mm512_maskz_mov_epi8(cells, bit[k % 8]));
                 }
             }
-        for (int j = 0; j < 4; ++j) {
-            __m512i entry = _mm512_setzero_si512();
-            for (int p = 0; p < 4; ++p)
-                entry = _mm512_or_si512(
-                    entry,
-                    _mm512_slli_epi32(_mm512_cvtepu8_epi32(_mm512_extracti32x4_epi32(plane[p], j)),
-                                      static_cast<unsigned>(8 * p)));
-            _mm512_storeu_si512(entries + j, entry);
-        }
+        _mm512_storeu_si512(entries + 0, cube_entry<0>(plane));
+        _mm512_storeu_si512(entries + 1, cube_entry<1>(plane));
+        _mm512_storeu_si512(entries + 2, cube_entry<2>(plane));
+        _mm512_storeu_si512(entries + 3, cube_entry<3>(plane));
     }
 }
 

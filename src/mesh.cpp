@@ -1,5 +1,6 @@
 #include "esf/mesh.hpp"
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -90,6 +92,77 @@ Mesh compact(const Mesh& mesh) {
     return out;
 }
 
+// The list lengths of a PLY body against the bytes that hold them (Assimp allocates whatever a
+// list announces): `in` stands after end_header; `remaining` bytes follow it. ASCII elements are
+// one line each.
+template <class Element>
+void check_ply_lists(std::istream& in, const std::string& path,
+                     const std::vector<Element>& elements, bool binary, bool big_endian,
+                     std::uint64_t remaining) {
+    const auto fail = [&](const Element& e, std::uint64_t i, const std::string& reason) {
+        throw IoError(file_message(
+            path, 0, "PLY " + e.name + " element " + std::to_string(i) + ": " + reason));
+    };
+    bool has_list = false;
+    for (const Element& e : elements)
+        for (const auto& p : e.layout) has_list = has_list || p.count_size != 0;
+    if (!has_list) return;  // the counts were checked against the file size
+    std::string line;
+    for (const Element& e : elements) {
+        const auto count = static_cast<std::uint64_t>(e.count);
+        for (std::uint64_t i = 0; i < count; ++i) {
+            if (binary) {
+                for (const auto& p : e.layout) {
+                    std::uint64_t items = 1;
+                    if (p.count_size != 0) {
+                        unsigned char bytes[8] = {};
+                        const auto n = static_cast<std::size_t>(p.count_size);
+                        if (remaining < n || !in.read(reinterpret_cast<char*>(bytes),
+                                                      static_cast<std::streamsize>(n)))
+                            fail(e, i, "truncated (a list count is missing)");
+                        remaining -= n;
+                        items = 0;
+                        for (std::size_t b = 0; b < n; ++b)
+                            items |= std::uint64_t{bytes[big_endian ? n - 1 - b : b]} << (8 * b);
+                        // The count types of real files are unsigned char and int; a negative
+                        // int reads as a huge count and is refused below.
+                    }
+                    const std::uint64_t bytes = items * static_cast<std::uint64_t>(p.size);
+                    if (items > remaining || bytes > remaining)
+                        fail(e, i,
+                             "a list of " + std::to_string(items) + " items, more than the " +
+                                 std::to_string(remaining) + " bytes left in the file hold");
+                    in.ignore(static_cast<std::streamsize>(bytes));
+                    remaining -= bytes;
+                }
+                continue;
+            }
+            do {
+                if (!std::getline(in, line)) fail(e, i, "truncated (the line is missing)");
+            } while (line.find_first_not_of(" \t\r") == std::string::npos);
+            std::istringstream values(line);
+            std::string value;
+            for (const auto& p : e.layout) {
+                if (!(values >> value)) fail(e, i, "fewer values than the element's properties");
+                if (p.count_size == 0) continue;
+                char* end = nullptr;
+                const double items = std::strtod(value.c_str(), &end);
+                if (*end != '\0' || !(items >= 0.0) || items != std::floor(items))
+                    fail(e, i, "a list count that is not a whole number >= 0");
+                // Each item takes at least a digit and a separator of this line.
+                if (items * 2.0 > static_cast<double>(line.size())) {
+                    std::ostringstream reason;
+                    reason << "a list of " << items << " items on a line of " << line.size()
+                           << " characters";
+                    fail(e, i, reason.str());
+                }
+                for (double k = 0; k < items; ++k)
+                    if (!(values >> value)) fail(e, i, "a list shorter than its count");
+            }
+        }
+    }
+}
+
 // Assimp 5.2 loops forever on a PLY header without `end_header` and allocates whatever the
 // header announces; check the header against the file size first.
 void check_ply_header(const std::string& path, std::uintmax_t file_size) {
@@ -102,12 +175,18 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
     constexpr std::size_t kMaxHeader = std::size_t{1} << 20;
     std::size_t header_bytes = line.size() + 1;
     bool binary = false;
+    bool big_endian = false;
     bool known_sizes = true;
+    struct Property {
+        int size = 0;        // bytes of a value (of an item, for a list)
+        int count_size = 0;  // bytes of a list's count; 0: not a list
+    };
     struct Element {
         std::string name;
         double count = 0;
         double min_bytes = 0;  // per element: fixed properties and list counts
         int properties = 0;
+        std::vector<Property> layout;
     };
     std::vector<Element> elements;
     const auto type_size = [](const std::string& type) -> int {
@@ -134,6 +213,7 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
             std::string format;
             words >> format;
             binary = format.rfind("binary", 0) == 0;
+            big_endian = format == "binary_big_endian";
         } else if (keyword == "element") {
             Element e;
             words >> e.name >> e.count;
@@ -142,11 +222,21 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
         } else if (keyword == "property" && !elements.empty()) {
             std::string type;
             words >> type;
-            if (type == "list") words >> type;  // the count type; items may be none
-            const int size = type_size(type);
+            Property property;
+            if (type == "list") {  // the count type; items may be none
+                std::string item;
+                words >> type >> item;
+                property.count_size = type_size(type);
+                property.size = type_size(item);
+                if (property.size == 0) known_sizes = false;
+            } else {
+                property.size = type_size(type);
+            }
+            const int size = property.count_size ? property.count_size : property.size;
             if (size == 0) known_sizes = false;
             elements.back().min_bytes += size;
             ++elements.back().properties;
+            elements.back().layout.push_back(property);
         }
     }
     if (!ended) throw IoError(file_message(path, 0, "PLY header has no end_header line"));
@@ -165,7 +255,128 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
             throw IoError(file_message(path, 0, reason.str()));
         }
     }
+    check_ply_lists(in, path, elements, binary, big_endian, static_cast<std::uint64_t>(available));
 }
+
+// Assimp 5.2 allocates whatever an OFF header announces and clamps a face's out-of-range vertex
+// index to the last vertex. OFF is text: check the counts against the file size, then that the
+// file holds that many vertices and faces and that every index names a vertex.
+void check_off(const std::string& path, std::uintmax_t file_size) {
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    std::size_t line_number = 0;
+    const auto next = [&]() -> bool {  // the next line with content, comments removed
+        while (std::getline(in, line)) {
+            ++line_number;
+            if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+            if (line.find_first_not_of(" \t\r") != std::string::npos) return true;
+        }
+        return false;
+    };
+    const auto fail = [&](std::size_t at, const std::string& reason) {
+        throw IoError(file_message(path, at, reason));
+    };
+    if (!next()) return;
+    std::istringstream first(line);
+    std::string magic;
+    first >> magic;
+    // [ST][C][N][4][n]OFF; 4-D, n-D and binary variants are left to Assimp.
+    if (magic.size() < 3 || magic.compare(magic.size() - 3, 3, "OFF") != 0) return;
+    if (magic.find_first_of("4n") != std::string::npos) return;
+    std::string rest;
+    std::getline(first, rest);
+    if (rest.find("BINARY") != std::string::npos) return;
+    if (rest.find_first_not_of(" \t\r") == std::string::npos) {
+        if (!next()) fail(0, "OFF file ends before its vertex and face counts");
+        rest = line;
+    }
+    const std::size_t counts_line = line_number;
+    std::istringstream counts(rest);
+    double vertices = -1.0, faces = -1.0;
+    counts >> vertices >> faces;
+    if (!counts || !(vertices >= 0.0) || !(faces >= 0.0) || vertices != std::floor(vertices) ||
+        faces != std::floor(faces))
+        fail(counts_line, "OFF vertex and face counts are not two whole numbers >= 0");
+    // At least "x y z" and a line end per vertex, "n" and a line end per face.
+    const double need = 6.0 * vertices + 2.0 * faces;
+    if (need > static_cast<double>(file_size)) {
+        std::ostringstream reason;
+        reason << "truncated OFF: the header announces " << vertices << " vertices and " << faces
+               << " faces, needing at least " << need << " bytes, but the file has " << file_size;
+        fail(counts_line, reason.str());
+    }
+    const auto vertex_count = static_cast<std::size_t>(vertices);
+    const auto face_count = static_cast<std::size_t>(faces);
+    for (std::size_t v = 0; v < vertex_count; ++v)
+        if (!next())
+            fail(0, "truncated OFF: " + std::to_string(v) + " of the " +
+                        std::to_string(vertex_count) + " vertices the header announces");
+    for (std::size_t f = 0; f < face_count; ++f) {
+        if (!next())
+            fail(0, "truncated OFF: " + std::to_string(f) + " of the " +
+                        std::to_string(face_count) + " faces the header announces");
+        std::istringstream face(line);
+        long long n = -1;
+        face >> n;
+        if (!face || n < 0)
+            fail(line_number, "OFF face " + std::to_string(f) + " has no valid vertex count");
+        for (long long i = 0; i < n; ++i) {
+            long long index = -1;
+            if (!(face >> index))
+                fail(line_number, "OFF face " + std::to_string(f) + " lists fewer than " +
+                                      std::to_string(n) + " vertex indices");
+            if (index < 0 || static_cast<std::size_t>(index) >= vertex_count)
+                fail(line_number, "OFF face " + std::to_string(f) + " has vertex index " +
+                                      std::to_string(index) + " outside [0, " +
+                                      std::to_string(vertex_count) + ")");
+        }
+    }
+}
+
+/// Assimp's file access for one model: regular files in the model's folder or below it (the
+/// folder as named, with its links resolved, or the one a symbolic link to the model leads to).
+/// Anything else (a material library or glTF buffer outside the folder, a FIFO, a device) does not
+/// exist for Assimp, so it is neither opened nor quoted in a message.
+class FolderIOSystem : public Assimp::DefaultIOSystem {
+  public:
+    explicit FolderIOSystem(const std::string& model) {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        const fs::path given = fs::absolute(fs::path(model), ec).lexically_normal();
+        folders_.push_back(given.parent_path());
+        const fs::path folder = fs::canonical(given.parent_path(), ec);
+        if (!ec) folders_.push_back(folder);
+        const fs::path real = fs::canonical(given, ec);
+        if (!ec) folders_.push_back(real.parent_path());
+    }
+    bool Exists(const char* file) const override {
+        return allowed(file) && Assimp::DefaultIOSystem::Exists(file);
+    }
+    Assimp::IOStream* Open(const char* file, const char* mode) override {
+        if (mode == nullptr || std::string(mode).find_first_of("wa+") != std::string::npos ||
+            !allowed(file))
+            return nullptr;
+        return Assimp::DefaultIOSystem::Open(file, mode);
+    }
+
+  private:
+    bool allowed(const char* file) const {
+        namespace fs = std::filesystem;
+        if (file == nullptr) return false;
+        std::error_code ec;
+        const fs::path real = fs::canonical(fs::path(file), ec);
+        if (ec) return false;
+        struct stat st {};
+        if (::stat(real.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
+        const auto inside = [&real](const fs::path& folder) {
+            return std::mismatch(folder.begin(), folder.end(), real.begin(), real.end()).first ==
+                   folder.end();
+        };
+        return std::any_of(folders_.begin(), folders_.end(), inside);
+    }
+
+    std::vector<std::filesystem::path> folders_;
+};
 
 }  // namespace
 
@@ -211,15 +422,20 @@ void check_mesh(const Mesh& mesh, const std::string& what) {
 
 Mesh load_mesh(const std::string& path) {
     std::error_code ec;
-    if (!std::filesystem::exists(path, ec)) throw IoError(file_message(path, 0, "no such file"));
+    if (!std::filesystem::exists(path, ec))
+        throw IoError(file_message(path, 0, ec ? "cannot read: " + ec.message() : "no such file"));
     if (std::filesystem::is_directory(path, ec))
         throw IoError(file_message(path, 0, "is a directory, not a mesh file"));
     const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
     if (ec) throw IoError(file_message(path, 0, "cannot read: " + ec.message()));
     if (file_size == 0) throw IoError(file_message(path, 0, "empty file"));
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw IoError(file_message(path, 0, "not a regular file"));
     check_ply_header(path, file_size);
+    check_off(path, file_size);
 
     Assimp::Importer importer;
+    importer.SetIOHandler(new FolderIOSystem(path));  // the importer owns and deletes it
     const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
     const auto fail = [&] {
         std::string reason = importer.GetErrorString();

@@ -5,16 +5,20 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
 namespace esf {
 
+int max_threads() { return 4 * tbb::info::default_concurrency(); }
+
 int resolve_threads(int threads) {
     if (threads < 0)
         throw std::invalid_argument("thread count must be >= 0 (0 = all cores), got " +
                                     std::to_string(threads));
-    return threads == 0 ? tbb::info::default_concurrency() : threads;
+    // Tens of thousands of TBB workers exhaust the allocator: never more than max_threads().
+    return threads == 0 ? tbb::info::default_concurrency() : std::min(threads, max_threads());
 }
 
 void parallel_for_slots(std::size_t count, int threads,

@@ -320,6 +320,30 @@ float measure(const Hit& hit, SensorNoise noise, double fx, std::uint64_t seed, 
     return static_cast<float>(kinect_measure(hit.t, hit.cos_incidence, fx, random));
 }
 
+// Embree asserts (and aborts) on rays whose origin or direction exceeds about 1.8e18, and float
+// rays lose all precision long before: cameras stay within kMaxCameraDistance metres of the
+// scene's origin and a pixel's ray direction (u - cx) / fx, (v - cy) / fy within kMaxRaySlope.
+constexpr double kMaxCameraDistance = 1e6;
+constexpr double kMaxRaySlope = 1e6;
+
+void validate_rays(const CameraIntrinsics& camera, const char* what) {
+    const double slope_x =
+        std::max(std::abs(camera.cx), std::abs(camera.width - camera.cx)) / camera.fx;
+    const double slope_y =
+        std::max(std::abs(camera.cy), std::abs(camera.height - camera.cy)) / camera.fy;
+    if (!(slope_x <= kMaxRaySlope && slope_y <= kMaxRaySlope))
+        throw std::invalid_argument(
+            std::string(what) +
+            ": the camera's principal point lies too far outside the image for its focal "
+            "lengths (a pixel's ray would be more than 1e6 times wider than deep)");
+}
+
+void validate_camera_distance(double distance, const char* what) {
+    if (!(distance <= kMaxCameraDistance))
+        throw std::invalid_argument(std::string(what) + " must be at most 1e6 m, got " +
+                                    std::to_string(distance) + " m");
+}
+
 void validate_noise(SensorNoise noise) {
     if (noise != SensorNoise::kNone && noise != SensorNoise::kKinect)
         throw std::invalid_argument("unknown sensor noise value");
@@ -425,10 +449,13 @@ MeshRenderer::MeshRenderer(const Mesh& mesh, const RenderOptions& options)
     impl_->radius = mesh.bounding_radius() * impl_->scale * (1.0 + 1e-5);
 
     const CameraIntrinsics& camera = options.camera;
+    validate_rays(camera, "renderer");
     if (options.max_distance &&
         !(std::isfinite(*options.max_distance) && *options.max_distance > 0.0))
         throw std::invalid_argument("largest camera distance must be positive and finite, got " +
                                     std::to_string(*options.max_distance));
+    if (options.max_distance)
+        validate_camera_distance(*options.max_distance, "largest camera distance");
     if (options.distance) {
         if (!(std::isfinite(*options.distance) && *options.distance > impl_->radius))
             throw std::invalid_argument(
@@ -442,6 +469,8 @@ MeshRenderer::MeshRenderer(const Mesh& mesh, const RenderOptions& options)
         const double ratio = 2.0 * f / (options.fill_fraction * side);
         impl_->distance = impl_->radius * std::sqrt(1.0 + ratio * ratio);
     }
+    // Also where a huge model or focal length puts the camera (fx = 1e30: about 1e30 m).
+    validate_camera_distance(impl_->distance, "camera distance");
 
     Eigen::Affine3d to_scene = Eigen::Affine3d::Identity();
     to_scene.linear() *= impl_->scale;
@@ -491,7 +520,10 @@ Points MeshRenderer::render_pose(const Eigen::Isometry3d& scaled_model_to_camera
     // scene = scaled model - scale * centre
     Eigen::Isometry3d scene_to_scaled = Eigen::Isometry3d::Identity();
     scene_to_scaled.translation() = impl_->scale * impl_->centre;
-    return impl_->cast(scaled_model_to_camera * scene_to_scaled, noise_key);
+    const Eigen::Isometry3d scene_to_camera = scaled_model_to_camera * scene_to_scaled;
+    validate_camera_distance(scene_to_camera.translation().norm(),
+                             "render_pose: the camera's distance from the model");
+    return impl_->cast(scene_to_camera, noise_key);
 }
 
 double MeshRenderer::scale() const { return impl_->scale; }
@@ -517,6 +549,9 @@ PointCloud render_scene(std::span<const SceneObject> objects,
     validate_noise(options.noise);
     if (!world_to_camera.matrix().allFinite())
         throw std::invalid_argument("render_scene: camera pose is not finite");
+    validate_rays(camera, "render_scene");
+    validate_camera_distance(world_to_camera.translation().norm(),
+                             "render_scene: the camera's distance from the world origin");
     if (!(options.table_half_size > 0.0))
         throw std::invalid_argument("render_scene: table half size must be positive");
     if (!(options.max_depth > 0.0))

@@ -290,9 +290,15 @@ std::vector<ModelFile> find_models(const std::string& root) {
     std::vector<ModelFile> out;
     try {
         for (const auto& category : fs::directory_iterator(root)) {
-            if (hidden(category.path()) || !category.is_directory()) continue;
+            // A folder that cannot be followed (a symbolic link loop) holds no category.
+            std::error_code category_ec;
+            if (hidden(category.path()) || !category.is_directory(category_ec)) continue;
             for (const auto& entry : fs::directory_iterator(category.path())) {
-                if (hidden(entry.path()) || !entry.is_regular_file()) continue;
+                // A mesh name that cannot be followed (a symbolic link loop, a dangling link)
+                // is listed: loading it fails and training records why, then goes on.
+                std::error_code entry_ec;
+                const bool regular = entry.is_regular_file(entry_ec);
+                if (hidden(entry.path()) || (!regular && !entry_ec)) continue;
                 auto ext = lower(entry.path().extension().string());
                 if (ext.size() < 2) continue;
                 ext.erase(0, 1);

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <thread>
 
 #include "error_of.hpp"
@@ -354,7 +355,7 @@ TEST_F(DatabaseTest, SeveralKindsAndSignaturesPerView) {
 
 TEST_F(DatabaseTest, WeightsRoundTrip) {
     const std::string path = file("db.sqlite");
-    const std::vector<float> w = {1.0f, 0.5f, 0.25f, 2.0f, 1.0f, 1.0f, 0.0f, 3.0f, 1.0f, 0.125f};
+    const std::vector<float> w = {1.0f, 0.5f, 0.25f, 2.0f, 1.0f, 1.0f, 0.75f, 3.0f, 1.0f, 0.125f};
     {
         Database db(path, OpenMode::kWrite);
         db.add_descriptor_kind(kEsf);
@@ -366,9 +367,83 @@ TEST_F(DatabaseTest, WeightsRoundTrip) {
         EXPECT_CONTAINS(invalid_argument_of([&] {
                             db.set_weights(std::vector<float>{1.0f, std::nanf("")});
                         }),
-                        ("non-finite"));
+                        ("weight 1 is nan: weights must be positive and finite"));
+        // Zero, negative and infinite weights are refused too: a zero weight makes every view
+        // of that block equally near.
+        for (const float bad : {0.0f, -1.0f, std::numeric_limits<float>::infinity()})
+            EXPECT_CONTAINS(invalid_argument_of([&] {
+                                db.set_weights(std::vector<float>{1.0f, 2.0f, bad});
+                            }),
+                            ("weight 2 is "));
+        EXPECT_EQ(db.weights(), w);  // the refused ones changed nothing
     }
     EXPECT_EQ(Database(path).weights("esf"), w);
+}
+
+TEST_F(DatabaseTest, WeightsAreIgnoredOnceTheDatabaseChanged) {
+    const std::string path = file("db.sqlite");
+    const std::vector<float> w(10, 2.0f);
+    Database db(path, OpenMode::kWrite);
+    db.add_descriptor_kind(kEsf);
+    db.write_model(make_model("mug", "a", 1.0f), "esf");
+    const std::string learned_on = db.content_fingerprint();
+    EXPECT_EQ(learned_on.size(), 16u);
+    db.set_weights(w, "esf", learned_on);
+    EXPECT_FALSE(db.weights_are_stale());
+    EXPECT_EQ(db.weights(), w);
+    EXPECT_EQ(Database(path).weights(), w);
+
+    // A category added by training: the weights stay stored but are stale and not applied.
+    db.write_model(make_model("box", "b", 2.0f), "esf");
+    EXPECT_NE(db.content_fingerprint(), learned_on);
+    EXPECT_TRUE(db.weights_are_stale());
+    EXPECT_EQ(db.weights(), std::nullopt);
+    EXPECT_EQ(db.stored_weights(), w);
+    EXPECT_TRUE(Database(path).weights_are_stale());
+
+    // Weights learned before that change are refused when stored; learned anew they apply.
+    EXPECT_CONTAINS(io_error_of([&] { db.set_weights(w, "esf", learned_on); }),
+                    (path + ": the database changed while its weights were learned"));
+    EXPECT_TRUE(db.weights_are_stale());
+    db.set_weights(w, "esf", db.content_fingerprint());
+    EXPECT_EQ(db.weights(), w);
+
+    // A model replaced by one with fewer views changes it too; rewriting the same does not.
+    const std::string now = db.content_fingerprint();
+    db.write_model(make_model("box", "b", 2.0f), "esf");
+    EXPECT_EQ(db.content_fingerprint(), now);
+    db.write_model(make_model("box", "b", 2.0f, 2), "esf");
+    EXPECT_NE(db.content_fingerprint(), now);
+}
+
+TEST_F(DatabaseTest, WeightsOfAFileWithoutTheirBasisAreStale) {
+    // Files written before weights recorded what they were learned on: the weights are kept
+    // but not applied (the database may have changed since).
+    const std::string path = file("db.sqlite");
+    {
+        Database db(path, OpenMode::kWrite);
+        db.add_descriptor_kind(kEsf);
+        db.write_model(make_model("mug", "a", 1.0f), "esf");
+        db.set_weights(std::vector<float>(10, 2.0f));
+    }
+    raw_sql(path, "DROP TABLE weights_basis;");
+    const Database db(path);
+    EXPECT_TRUE(db.weights_are_stale());
+    EXPECT_EQ(db.weights(), std::nullopt);
+    EXPECT_EQ(db.stored_weights(), std::vector<float>(10, 2.0f));
+}
+
+TEST_F(DatabaseTest, OneWriterAtATime) {
+    const std::string path = file("db.sqlite");
+    std::optional<Database> writer(std::in_place, path, OpenMode::kWrite);
+    EXPECT_EQ(io_error_of([&] { Database other(path, OpenMode::kWrite); }),
+              path + ": database is in use by another training");
+    writer->add_descriptor_kind(kEsf);
+    writer->write_model(make_model("mug", "a", 1.0f), "esf");
+    EXPECT_EQ(Database(path).summary().models, 1u);  // a reader is never refused
+    writer.reset();
+    Database next(path, OpenMode::kWrite);
+    EXPECT_EQ(next.summary().models, 1u);
 }
 
 TEST_F(DatabaseTest, ReadOnlyOpenNeverCreatesOrWrites) {

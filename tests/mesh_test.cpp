@@ -1,6 +1,7 @@
 #include "esf/mesh.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <array>
@@ -8,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -269,6 +271,175 @@ TEST_F(MeshTest, LoadErrorsNameTheFile) {
 
     const std::string degenerate = write("degenerate.obj", "v 0 0 0\nv 1 0 0\nf 1 2 2\n");
     EXPECT_EQ(error_of([&] { esf::load_mesh(degenerate); }).rfind(degenerate + ": ", 0), 0u);
+}
+
+TEST_F(MeshTest, OffCountsAndIndicesAreCheckedBeforeAssimp) {
+    // Assimp clamps an out-of-range index to the last vertex; it is an error.
+    const std::string bad_index = write("bad_index.off",
+                                        "OFF\n# a comment\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                        "3 0 1 2\n3 0 1 4\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(bad_index); }),
+              bad_index + ":9: OFF face 1 has vertex index 4 outside [0, 4)");
+    const std::string negative =
+        write("negative.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(negative); }),
+              negative + ":5: OFF face 0 has vertex index -1 outside [0, 3)");
+
+    // A 50-byte file announcing 9e8 faces: refused before anything is allocated.
+    const std::string huge =
+        write("huge.off", "OFF\n3 900000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(huge); }),
+              huge +
+                  ":2: truncated OFF: the header announces 3 vertices and 9e+08 faces, needing "
+                  "at least 1.8e+09 bytes, but the file has " +
+                  std::to_string(fs::file_size(huge)));
+
+    // Fewer vertices or faces than announced, and short faces.
+    const std::string short_faces =
+        write("short.off", "OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(short_faces); }),
+              short_faces + ": truncated OFF: 2 of the 3 faces the header announces");
+    const std::string short_face =
+        write("short_face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n                \n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(short_face); }),
+              short_face + ":6: OFF face 0 lists fewer than 3 vertex indices");
+    const std::string bad_counts = write("bad_counts.off", "OFF\n3 -1 0\n0 0 0\n1 0 0\n0 1 0\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(bad_counts); }),
+              bad_counts + ":2: OFF vertex and face counts are not two whole numbers >= 0");
+
+    // A valid file still loads.
+    const std::string valid = write("valid.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_EQ(esf::load_mesh(valid).triangles.size(), 1u);
+}
+
+TEST_F(MeshTest, PlyListLengthsAreCheckedBeforeAssimp) {
+    // A 100-byte file whose one face lists 9e8 vertices (Assimp would allocate 3.6 GB).
+    const std::string header =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const std::string ascii = write("list.ply", header + "0 0 0\n1 0 0\n0 1 0\n900000000 0 1 2\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(ascii); }),
+              ascii + ": PLY face element 0: a list of 9e+08 items on a line of 15 characters");
+    const std::string short_list =
+        write("short_list.ply", header + "0 0 0\n1 0 0\n0 1 0\n4 0 1 2        \n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(short_list); }),
+              short_list + ": PLY face element 0: a list shorter than its count");
+    const std::string short_vertex =
+        write("short_vertex.ply", header + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(short_vertex); }),
+              short_vertex + ": PLY vertex element 1: fewer values than the element's properties");
+
+    // Binary, an int count of 1e9 in a file of a hundred bytes.
+    std::string binary =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 1\n"
+        "property list int int vertex_indices\nend_header\n";
+    for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f})
+        binary.append(reinterpret_cast<const char*>(&v), 4);
+    const std::int32_t counts[4] = {1000000000, 0, 1, 2};
+    binary.append(reinterpret_cast<const char*>(counts), sizeof counts);
+    const std::string huge = write("huge_list.ply", binary);
+    EXPECT_EQ(error_of([&] { esf::load_mesh(huge); }),
+              huge +
+                  ": PLY face element 0: a list of 1000000000 items, more than the 12 bytes left "
+                  "in the file hold");
+    // The same with the right count loads.
+    binary.replace(binary.size() - sizeof counts, 4, std::string("\x03\0\0\0", 4));
+    EXPECT_EQ(esf::load_mesh(write("good_list.ply", binary)).triangles.size(), 1u);
+    EXPECT_EQ(esf::load_mesh(write("good.ply", header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"))
+                  .triangles.size(),
+              1u);
+}
+
+TEST_F(MeshTest, APlyMeshCutShortIsAnErrorWhereverItIsCut) {
+    // A 6 x 6 vertex grid, 50 triangles, binary (written by esf) and ASCII. Cut at 30 % to 99 %
+    // of its length, Assimp aborted (30-60 %) or returned a part of the mesh (75-99 %).
+    esf::Mesh grid;
+    for (int y = 0; y < 6; ++y)
+        for (int x = 0; x < 6; ++x)
+            grid.vertices.emplace_back(static_cast<float>(x), static_cast<float>(y), 0.0f);
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x) {
+            const int i = 6 * y + x;
+            grid.triangles.emplace_back(i, i + 1, i + 7);
+            grid.triangles.emplace_back(i, i + 7, i + 6);
+        }
+    const std::string binary_path = (dir_ / "grid.ply").string();
+    esf::write_ply_mesh(binary_path, grid);
+    std::ifstream in(binary_path, std::ios::binary);
+    const std::string binary((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+    std::string ascii =
+        "ply\nformat ascii 1.0\nelement vertex 36\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 50\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const auto& v : grid.vertices)
+        ascii += std::to_string(v.x()) + " " + std::to_string(v.y()) + " 0\n";
+    for (const auto& t : grid.triangles)
+        ascii += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " +
+                 std::to_string(t[2]) + "\n";
+    EXPECT_EQ(esf::load_mesh(write("whole_ascii.ply", ascii)).triangles.size(), 50u);
+    EXPECT_EQ(esf::load_mesh(binary_path).triangles.size(), 50u);
+    for (const double fraction : {0.3, 0.45, 0.6, 0.75, 0.9, 0.99}) {
+        const auto cut = [fraction](const std::string& text) {
+            return text.substr(
+                0, static_cast<std::size_t>(fraction * static_cast<double>(text.size())));
+        };
+        const std::string b = write("cut.ply", cut(binary));
+        EXPECT_THROW(esf::load_mesh(b), esf::IoError) << fraction;
+        // ASCII cut inside the last line it keeps: that line may still read as whole, the
+        // lines after it are missing.
+        const std::string a = write("cut_ascii.ply", cut(ascii));
+        EXPECT_THROW(esf::load_mesh(a), esf::IoError) << fraction;
+    }
+}
+
+TEST_F(MeshTest, NoFileOutsideTheModelsFolderIsOpened) {
+    // A glTF whose buffer lies beside the model loads; the same buffer one folder up does not
+    // exist for the importer (as /etc/passwd would not).
+    std::vector<std::uint8_t> buffer(44, 0);
+    const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const std::uint16_t indices[3] = {0, 1, 2};
+    std::memcpy(buffer.data(), positions, sizeof(positions));
+    std::memcpy(buffer.data() + 36, indices, sizeof(indices));
+    const auto gltf = [](const std::string& uri) {
+        return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"byteLength": 44, "uri": ")" +
+               uri + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                  {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]})";
+    };
+    fs::create_directories(dir_ / "model");
+    const std::string bytes(buffer.begin(), buffer.end());
+    write("model/inside.bin", bytes);
+    write("outside.bin", bytes);
+    EXPECT_EQ(esf::load_mesh(write("model/inside.gltf", gltf("inside.bin"))).triangles.size(), 1u);
+    const std::string outside = write("model/outside.gltf", gltf("../outside.bin"));
+    EXPECT_THROW(esf::load_mesh(outside), esf::IoError);
+    const std::string absolute =
+        write("model/absolute.gltf", gltf((dir_ / "outside.bin").string()));
+    EXPECT_THROW(esf::load_mesh(absolute), esf::IoError);
+    // A link beside the model to a file outside its folder is outside too.
+    fs::create_symlink(dir_ / "outside.bin", dir_ / "model" / "link.bin");
+    EXPECT_THROW(esf::load_mesh(write("model/link.gltf", gltf("link.bin"))), esf::IoError);
+
+    // Material libraries that are FIFOs (inside or outside the folder) are never opened: an
+    // open would wait forever for a writer. The mesh itself loads.
+    ASSERT_EQ(::mkfifo((dir_ / "model" / "pipe.mtl").c_str(), 0600), 0);
+    ASSERT_EQ(::mkfifo((dir_ / "secret.mtl").c_str(), 0600), 0);
+    const std::string obj =
+        write("model/quad.obj",
+              "mtllib pipe.mtl\nmtllib ../secret.mtl\nmtllib ../../../etc/shadow\n"
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    EXPECT_EQ(esf::load_mesh(obj).triangles.size(), 1u);
+    // A mesh that is itself a FIFO: one line, no wait.
+    ASSERT_EQ(::mkfifo((dir_ / "model" / "fifo.obj").c_str(), 0600), 0);
+    EXPECT_CONTAINS(error_of([&] { esf::load_mesh((dir_ / "model" / "fifo.obj").string()); }),
+                    "fifo.obj: ");
 }
 
 TEST_F(MeshTest, WriteErrors) {

@@ -512,6 +512,48 @@ TEST(RenderScene, ThreadCountDoesNotMatter) {
     }
 }
 
+TEST(Render, InputsEmbreeCannotTakeAreRefusedFirst) {
+    // Embree aborts on ray origins or directions beyond about 1.8e18; these would reach it.
+    const esf::Mesh box = make_box(0.1, 0.1, 0.1);
+    esf::RenderOptions options;
+    options.distance = 1e20;
+    EXPECT_EQ(error_of([&] { esf::render_views(box, options); }),
+              "camera distance must be at most 1e6 m, got 100000000000000000000.000000 m");
+    options = {};
+    options.distance = 0.6;
+    options.max_distance = 1e7;
+    EXPECT_EQ(error_of([&] { esf::render_views(box, options); }),
+              "largest camera distance must be at most 1e6 m, got 10000000.000000 m");
+    options = {};
+    options.camera.fx = options.camera.fy = 1e30;  // the automatic distance: about 1e29 m
+    EXPECT_CONTAINS(error_of([&] { esf::render_views(box, options); }),
+                    "camera distance must be at most 1e6 m, got ");
+    options = {};
+    options.camera.fx = 1e-30;  // rays 1e32 times wider than deep
+    EXPECT_CONTAINS(error_of([&] { esf::render_views(box, options); }),
+                    "renderer: the camera's principal point lies too far outside the image");
+    options = {};
+    options.camera.cy = -1e300;
+    EXPECT_CONTAINS(error_of([&] { esf::render_views(box, options); }), "too far outside");
+
+    // Just inside the limits, it renders.
+    options = {};
+    options.distance = 1e6;
+    options.level = 0;
+    EXPECT_EQ(esf::render_views(box, options).size(), 20u);
+
+    const esf::MeshRenderer renderer(box, esf::RenderOptions{});
+    Eigen::Isometry3d far_away = Eigen::Isometry3d::Identity();
+    far_away.translation() = Eigen::Vector3d(0, 0, 1e20);
+    EXPECT_CONTAINS(error_of([&] { renderer.render_pose(far_away, 0); }),
+                    "render_pose: the camera's distance from the model must be at most 1e6 m");
+    const esf::SceneObject object{&box, Eigen::Isometry3d::Identity()};
+    EXPECT_CONTAINS(error_of([&] {
+                        esf::render_scene({&object, 1}, far_away, {});
+                    }),
+                    "render_scene: the camera's distance from the world origin must be at most");
+}
+
 TEST(Render, ErrorsSayWhatIsWrong) {
     const esf::Mesh box = make_box(0.1, 0.1, 0.1);
     esf::RenderOptions options;

@@ -728,6 +728,41 @@ TEST_F(TrainingRunTest, BrokenMeshesAreStoredAsFailedAndRetried) {
     EXPECT_EQ(db.summary().failed_models, 0u);
 }
 
+TEST_F(TrainingRunTest, SymbolicLinkLoopsAreReportedAndTrainingGoesOn) {
+    fs::create_symlink("loop.ply", dir_ / "root" / "box" / "loop.ply");  // points at itself
+    fs::create_symlink("looping", dir_ / "root" / "looping");            // a category folder too
+    const auto models = find_models(root());
+    ASSERT_EQ(models.size(), 5u);  // the four meshes and the looping file; no "looping" category
+    EXPECT_EQ(models[3].file, "box/loop.ply");  // ball/egg, ball/sphere, box/cube, box/loop, ...
+
+    Database db(path("db.sqlite"), OpenMode::kWrite);
+    const TrainingResult r = train(root(), db, fast_options());
+    EXPECT_EQ(r.models_trained, 4u);
+    EXPECT_EQ(r.models_failed, 1u);
+    ASSERT_EQ(r.failures.size(), 1u);
+    EXPECT_EQ(r.failures[0].model, "box/loop");
+    EXPECT_CONTAINS(r.failures[0].error, "loop.ply: cannot read: ");
+    EXPECT_CONTAINS(r.failures[0].error, "symbolic links");
+    EXPECT_EQ(db.model_status("box", "loop"), ModelStatus::kFailed);
+}
+
+TEST_F(TrainingRunTest, ASecondWriterIsRefusedAndNothingMixes) {
+    const TrainingOptions o = fast_options();
+    Database first(path("db.sqlite"), OpenMode::kWrite);
+    // Another training on the same new database, while the first holds it: refused at open.
+    EXPECT_EQ(error_of<IoError>([&] { Database second(path("db.sqlite"), OpenMode::kWrite); }),
+              path("db.sqlite") + ": database is in use by another training");
+    train(root(), first, o);
+    {
+        const Database reader(path("db.sqlite"));  // readers are never refused
+        EXPECT_EQ(reader.summary().models, 4u);
+    }
+    EXPECT_THROW(Database(path("db.sqlite"), OpenMode::kWrite), IoError);
+    first = Database(path("other.sqlite"), OpenMode::kWrite);  // the lock goes with the writer
+    Database again(path("db.sqlite"), OpenMode::kWrite);
+    EXPECT_EQ(train(root(), again, o).models_existing, 4u);
+}
+
 TEST_F(TrainingRunTest, ViewsWithTooFewPointsAreSkippedAndCounted) {
     TrainingOptions o = fast_options();
     o.min_points = 1'000'000;  // no view has that many: every one is skipped

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the esf subcommands: exit codes, errors, progress display.
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,17 @@ inline constexpr int kExitRuntime = 2;
 struct ExitStatus {
     int code;
 };
+
+/// For --threads: refuses a negative count; a count above esf::max_threads() (4 x the cores)
+/// becomes that, with a warning line on stderr.
+CLI::Validator thread_limit();
+
+/// For --seed: refuses a negative value (CLI11 would otherwise wrap -1 around to 2^64 - 1).
+CLI::Validator non_negative_seed();
+
+/// A warning line on stderr when `database` holds learned weights of `descriptor` (empty: the
+/// only kind) that were learned before the database last changed: they are ignored.
+void warn_if_weights_stale(const std::string& database, const std::string& descriptor);
 
 /// True when stderr is a terminal (progress bars are drawn only then).
 bool stderr_is_terminal();

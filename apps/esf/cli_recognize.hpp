@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "cli_common.hpp"
 #include "esf/recognizer.hpp"
 
 namespace esf::cli {
@@ -35,6 +36,7 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
     cmd.add_option("--threads", args.options.threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
 }

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "cli_common.hpp"
 #include "esf/cloud_io.hpp"
 
 namespace esf::cli {
@@ -83,7 +84,9 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
     cmd.add_option("--max-cluster-points", o.max_cluster_points,
                    "Larger clusters are dropped (points)")
         ->capture_default_str();
-    cmd.add_option("--seed", o.seed, "RANSAC seed")->capture_default_str();
+    cmd.add_option("--seed", o.seed, "RANSAC seed")
+        ->check(esf::cli::non_negative_seed())
+        ->capture_default_str();
 }
 
 SegmentationOptions segmentation_options(const SceneInputArgs& args) {

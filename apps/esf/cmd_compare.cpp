@@ -283,8 +283,10 @@ void add_compare_command(CLI::App& app) {
                     "Synthetic queries: at most this many views, evenly spaced (0 = all)")
         ->capture_default_str();
     cmd->add_option("--seed", args->seed, "Training seed (sensor noise, descriptor sampling)")
+        ->check(esf::cli::non_negative_seed())
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_flag("--json", args->json, "Print the comparison as one JSON object");

@@ -359,6 +359,7 @@ void add_demo_command(CLI::App& app) {
         "true_class, label_share, correct}], found, correct}, seconds}. With --work and\n"
         "--report, `esf scene WORK/demo_*.db REPORT/scene_depth.png` recognises the scene again.");
     cmd->add_option("--seed", o.seed, "Random seed of models, views, noise and scene")
+        ->check(esf::cli::non_negative_seed())
         ->capture_default_str();
     cmd->add_option("--per-class", o.per_class, "Training models per category")
         ->capture_default_str()
@@ -385,6 +386,7 @@ void add_demo_command(CLI::App& app) {
                     "temporary folder, removed at the end)");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the text");
     cmd->add_option("--threads", o.threads, "Worker threads (0 = all cores)")
+        ->transform(esf::cli::thread_limit())
         ->capture_default_str()
         ->check(CLI::Range(0, 4096));
     cmd->callback([args] { run_demo_command(*args); });

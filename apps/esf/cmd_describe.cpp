@@ -121,6 +121,7 @@ void add_describe_command(CLI::App& app) {
         "Non-finite points are dropped first. CSV: one line per file, path,v0,...,v639.");
     cmd->add_option("files", args->files, "Point-cloud files (.pcd, .ply, .xyz/.txt)")->required();
     cmd->add_option("--seed", args->seed, "Random seed; same seed, same descriptor")
+        ->check(esf::cli::non_negative_seed())
         ->capture_default_str();
     cmd->add_option("--samples", args->samples, "Point triples sampled (paper: 20000)")
         ->capture_default_str();
@@ -131,6 +132,7 @@ void add_describe_command(CLI::App& app) {
         ->check(CLI::IsMember({"fast", "pcl"}))
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("--format", args->format, "Output format: csv or json")

@@ -64,6 +64,7 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
 void run_scene_eval(const EvalArgs& args) {
     const SceneSet set = read_scene_set(args.scenes);
     const Recognizer recognizer(args.database, recognizer_options(args));
+    if (!args.no_weights) warn_if_weights_stale(args.database, recognizer.info().setup.kind.name);
     SceneEvaluationOptions options;
     options.segmentation.grouping = args.grouping;
     options.segmentation.threads = args.threads;
@@ -175,7 +176,10 @@ void run_eval(const EvalArgs& args) {
         options.threads = args.threads;
         options.max_queries = args.max_queries;
         options.groups = cli_model_groups(matrix, args.groups);
-        if (!args.no_weights) options.weights = stored_dimension_weights(db, matrix);
+        if (!args.no_weights) {
+            options.weights = stored_dimension_weights(db, matrix);
+            warn_if_weights_stale(args.database, matrix.kind.name);
+        }
         if (!args.queries.empty()) {
             const Database query_db(args.queries, OpenMode::kRead);
             const DescriptorMatrix queries = query_db.load_descriptors(matrix.kind.name);
@@ -199,6 +203,8 @@ void run_eval(const EvalArgs& args) {
     } else {
         const TestSet set = read_test_set(args.test_set);
         const Recognizer recognizer(args.database, recognizer_options(args));
+        if (!args.no_weights)
+            warn_if_weights_stale(args.database, recognizer.info().setup.kind.name);
         EvaluationOptions options;
         options.k = args.k;
         options.threads = args.threads;
@@ -304,6 +310,7 @@ void add_eval_command(CLI::App& app) {
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_flag("--synthetic", args->synthetic,

@@ -114,11 +114,14 @@ void add_generate_command(CLI::App& app) {
     cmd->add_option("--per-class", args->per_class, "Models per category")
         ->capture_default_str()
         ->check(CLI::Range(1, 100000));
-    cmd->add_option("--seed", args->seed, "Random seed")->capture_default_str();
+    cmd->add_option("--seed", args->seed, "Random seed")
+        ->check(esf::cli::non_negative_seed())
+        ->capture_default_str();
     cmd->add_option("--categories", args->categories,
                     "Comma-separated subset of the categories (default: all)")
         ->delimiter(',');
     cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)")
+        ->transform(esf::cli::thread_limit())
         ->capture_default_str()
         ->check(CLI::Range(0, 4096));
     cmd->add_flag("--json", args->json,

@@ -73,7 +73,10 @@ void print_text(const InfoArgs& args, const Database& db, const DatabaseSummary&
     std::printf("\n");
     for (const auto& k : s.descriptor_kinds)
         std::printf("descriptor: %s version %d, %d floats, weights: %s\n", k.name.c_str(),
-                    k.version, k.dimension, db.weights(k.name) ? "learned" : "none");
+                    k.version, k.dimension,
+                    db.weights_are_stale(k.name) ? "stale (ignored; learn them again)"
+                    : db.weights(k.name)         ? "learned"
+                                                 : "none");
 
     std::printf("\n%-20s %7s %7s %8s\n", "category", "models", "views", "skipped");
     for (const auto& c : s.categories) {

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,11 +42,17 @@ struct LearnArgs {
 
 void run_learn_weights(const LearnArgs& args) {
     const auto start = std::chrono::steady_clock::now();
-    // Read first; the database is opened for writing only to store the result.
+    // The file must exist (a writer would create it) and, unless --dry-run, be writable and not
+    // in training: checked before learning. The writer is held until the weights are stored,
+    // so the database cannot change in between (and set_weights checks that it did not).
+    std::optional<Database> writer;
+    std::string learned_on;
     DescriptorMatrix matrix;
     {
         const Database db(args.database, OpenMode::kRead);
+        if (!args.dry_run) writer.emplace(args.database, OpenMode::kWrite);
         matrix = db.load_descriptors(args.descriptor);
+        learned_on = db.content_fingerprint(matrix.kind.name);
     }
     const DescriptorInfo info = descriptor_info(matrix.kind.name);
     if (descriptor_blocks(info).size() < 2)
@@ -77,10 +84,7 @@ void run_learn_weights(const LearnArgs& args) {
     eval.weights = descriptor_dimension_weights(info, learned.weights);
     const EvaluationReport after = evaluate_synthetic(matrix, eval);
 
-    if (!args.dry_run) {
-        Database db(args.database, OpenMode::kWrite);
-        db.set_weights(learned.weights, matrix.kind.name);
-    }
+    if (writer) writer->set_weights(learned.weights, matrix.kind.name, learned_on);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const std::vector<std::string>& names = info.block_names;
@@ -186,6 +190,7 @@ void add_learn_weights_command(CLI::App& app) {
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_flag("--dry-run", args->dry_run, "Learn and print, but do not store the weights");

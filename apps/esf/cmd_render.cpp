@@ -246,8 +246,10 @@ void add_render_command(CLI::App& app) {
         ->check(CLI::IsMember({"none", "kinect"}))
         ->capture_default_str();
     cmd->add_option("--seed", args->seed, "Noise seed; same seed, same views (any thread count)")
+        ->check(esf::cli::non_negative_seed())
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("--encoding", args->encoding,

@@ -152,6 +152,8 @@ void run_scene(SceneArgs& args) {
     SegmentationOptions segmentation = segmentation_options(args.input);
     segmentation.threads = args.recognizer.options.threads;
     const Recognizer recognizer(args.recognizer.database, recognizer_options(args.recognizer));
+    if (!args.recognizer.no_weights)
+        warn_if_weights_stale(args.recognizer.database, recognizer.info().setup.kind.name);
 
     std::unique_ptr<ViewRenderer> views;
     if (!args.meshes.empty())

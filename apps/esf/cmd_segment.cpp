@@ -164,6 +164,7 @@ void add_segment_command(CLI::App& app) {
     add_depth_png_options(*cmd, args->input);
     add_segmentation_options(*cmd, args->input);
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_flag("--json", args->json, "Print summary.json to stdout instead of the table");

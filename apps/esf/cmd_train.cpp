@@ -159,9 +159,11 @@ void add_train_command(CLI::App& app) {
         ->check(CLI::Range(0, 4))
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
+        ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("--seed", args->seed, "Random seed (sensor noise, descriptor sampling)")
+        ->check(esf::cli::non_negative_seed())
         ->capture_default_str();
     cmd->add_option("--samples", args->samples,
                     "Point triples per view of esf, esf-angles, sdvs, d2 (paper: 20000)")

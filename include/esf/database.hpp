@@ -11,6 +11,7 @@
 //   descriptors(view_id, kind_id, signature, data)                    float32 blobs, several
 //                                                                     signatures per view allowed
 //   weights(kind_id, data)                                            learned block weights
+//   weights_basis(kind_id, fingerprint)                               what they were learned on
 //
 // Writes go through write_model(): a model and all its views and descriptors in one transaction
 // (write-ahead log while a writer is open, synced on every commit), so a killed writer leaves
@@ -148,7 +149,10 @@ struct DescriptorMatrix {
 class Database {
   public:
     /// Opens (kWrite: creates if needed) the database at `path`. Throws esf::IoError when the
-    /// file is missing (kRead), is not an esf database, is truncated or has another schema.
+    /// file is missing (kRead), is not an esf database, is truncated or has another schema, and
+    /// for kWrite when the file is read-only or another writer (in any process) has it open:
+    /// "database is in use by another training". A writer holds that lock until it is
+    /// destroyed; readers take none.
     explicit Database(const std::string& path, OpenMode mode = OpenMode::kRead);
     ~Database();
     Database(Database&&) noexcept;
@@ -189,11 +193,26 @@ class Database {
     /// models. Throws std::invalid_argument when the kind is absent or ambiguous.
     DescriptorMatrix load_descriptors(const std::string& descriptor = {}) const;
 
+    /// A fingerprint (16 hex digits) of what weights of the kind are learned on: the complete
+    /// models (category, name, scale) and their count of descriptors of the kind. Training,
+    /// retraining or removing a model changes it.
+    std::string content_fingerprint(const std::string& descriptor = {}) const;
     /// Learned weights of the descriptor's blocks (ESF: ten sub-histograms), replacing earlier
-    /// ones. Throws std::invalid_argument for an empty or non-finite vector or an unknown kind.
-    void set_weights(std::span<const float> weights, const std::string& descriptor = {});
-    /// The stored weights, std::nullopt when none were set.
+    /// ones, stored with the database's content_fingerprint(). Throws std::invalid_argument for
+    /// an empty vector, a weight that is zero, negative or not finite, or an unknown kind; and
+    /// esf::IoError when `learned_on` (the fingerprint read with the descriptors the weights were
+    /// learned from; empty: not checked) is no longer the database's.
+    void set_weights(std::span<const float> weights, const std::string& descriptor = {},
+                     const std::string& learned_on = {});
+    /// The stored weights when they were learned on the database as it is now; std::nullopt
+    /// when none were set or when they are stale (weights_are_stale()).
     std::optional<std::vector<float>> weights(const std::string& descriptor = {}) const;
+    /// The stored weights whatever they were learned on, std::nullopt when none were set.
+    std::optional<std::vector<float>> stored_weights(const std::string& descriptor = {}) const;
+    /// True when weights are stored but the database changed since they were learned (a model
+    /// trained, replaced or removed), or they were stored by a version of esf that did not
+    /// record what they were learned on. weights() ignores stale weights.
+    bool weights_are_stale(const std::string& descriptor = {}) const;
 
   private:
     struct Impl;

@@ -7,7 +7,10 @@
 
 namespace esf {
 
-/// Number of threads a `threads` option means: 0 = all cores; negative is rejected.
+/// The most threads a `threads` option gets: 4 x the cores (tbb::info::default_concurrency()).
+int max_threads();
+/// Number of threads a `threads` option means: 0 = all cores; above max_threads() it is
+/// clamped to max_threads() without notice (a CLI warns); negative is rejected.
 int resolve_threads(int threads);
 
 /// Calls body(i) for i in [0, count) on `threads` threads (0 = all cores, 1 = the caller only).

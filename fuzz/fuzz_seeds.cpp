@@ -1,0 +1,166 @@
+// Writes the seed corpora of the fuzz targets: small valid inputs of every reader, made with the
+// library's own writers where it has them. Usage: esf_fuzz_seeds OUT_DIR (creates
+// OUT_DIR/<target>/).
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "esf/cloud_io.hpp"
+#include "esf/database.hpp"
+#include "esf/depth_image.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_file(const fs::path& path, const std::string& bytes) {
+    fs::create_directories(path.parent_path());
+    std::ofstream out(path, std::ios::binary);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+std::string read_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+esf::PointCloud small_cloud(bool organised, bool labels) {
+    esf::PointCloud cloud;
+    for (int i = 0; i < 6; ++i)
+        cloud.points.emplace_back(0.1f * static_cast<float>(i), 0.2f,
+                                  0.5f + 0.01f * static_cast<float>(i));
+    cloud.width = organised ? 3 : 6;
+    cloud.height = organised ? 2 : 1;
+    if (labels) cloud.labels = {0, 0, 10, 10, 20, 0};
+    return cloud;
+}
+
+void pcd_seeds(const fs::path& dir) {
+    int n = 0;
+    for (const auto encoding :
+         {esf::PcdEncoding::kAscii, esf::PcdEncoding::kBinary, esf::PcdEncoding::kBinaryCompressed})
+        for (const bool organised : {false, true}) {
+            std::ostringstream out;
+            esf::write_pcd(out, small_cloud(organised, organised), encoding);
+            write_file(dir / ("seed" + std::to_string(n++) + ".pcd"), out.str());
+        }
+}
+
+void ply_seeds(const fs::path& dir) {
+    const std::string header =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n";
+    write_file(dir / "ascii.ply", header + "0 0 1\n0.5 0 1\n0 0.5 1.25\n");
+    std::string binary =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+        "property float y\nproperty float z\nproperty uchar red\nend_header\n";
+    for (const float v : {0.f, 0.f, 1.f}) binary.append(reinterpret_cast<const char*>(&v), 4);
+    binary.push_back('\x7f');
+    for (const float v : {0.5f, 0.f, 1.f}) binary.append(reinterpret_cast<const char*>(&v), 4);
+    binary.push_back('\x01');
+    write_file(dir / "binary.ply", binary);
+    std::string big =
+        "ply\nformat binary_big_endian 1.0\nelement vertex 1\nproperty double x\n"
+        "property double y\nproperty double z\nend_header\n";
+    for (const double v : {0.25, -0.5, 1.5}) {
+        char b[8];
+        std::memcpy(b, &v, 8);
+        for (int i = 7; i >= 0; --i) big.push_back(b[i]);
+    }
+    write_file(dir / "big_endian.ply", big);
+}
+
+void xyz_seeds(const fs::path& dir) {
+    write_file(dir / "spaces.xyz", "# x y z\n0 0 1\n0.5 0 1\n0 0.5 1.25 7\n");
+    write_file(dir / "commas.xyz", "1e-3,2.5,-3\r\n4,5,6\r\n");
+}
+
+void depth_png_seeds(const fs::path& dir) {
+    const double intrinsics[4] = {525.0, 525.0, 1.5, 1.0};
+    std::string head(sizeof intrinsics, '\0');
+    std::memcpy(head.data(), intrinsics, sizeof intrinsics);
+    esf::DepthImage image;
+    image.width = 4;
+    image.height = 3;
+    image.depth = {0, 800, 801, 0, 900, 901, 902, 903, 0, 0, 1200, 65535};
+    std::ostringstream out;
+    esf::write_depth_png(out, image, "seed.png");
+    write_file(dir / "seed.bin", head + out.str());
+}
+
+void csv_seeds(const fs::path& root) {
+    write_file(root / "test_set" / "plain.csv", "file,class\na.pcd,mug\nsub/b.pcd,bottle\n");
+    write_file(root / "test_set" / "quoted.csv",
+               "\xEF\xBB\xBF\"Class\", notes ,FILE\r\n\"mug\",\"a, \"\"b\"\"\",\"x\ny.pcd\"\r\n");
+    write_file(root / "catalog" / "catalog.csv",
+               "file,category,source,model,group,extent,metric\n"
+               "mug/a.ply,mug,3dnet,a,g1,0.12,yes\nmug/b.off,mug,3dnet,b,g1,3.5,no\n"
+               "bottle/c.obj,bottle,,c,,0,yes\n");
+    write_file(
+        root / "scene_set" / "scenes.csv",
+        "scene_file,object_id,class,scene_type\ns1.pcd,1,mug,stacked\ns1.pcd,2,bowl,stacked\n"
+        "s2.pcd,1,mug,occluded\n");
+    write_file(root / "scene_set" / "short.csv", "class,object_id,scene_file\nbox,3,\"s 3.pcd\"\n");
+}
+
+void database_seeds(const fs::path& dir) {
+    fs::create_directories(dir);
+    const fs::path path = dir / "tmp.sqlite";
+    fs::remove(path);
+    {
+        esf::Database db(path.string(), esf::OpenMode::kWrite);
+        db.set_settings({{"seed", std::int64_t{1}}, {"distance", 0.75}, {"noise", "kinect"}});
+        db.add_descriptor_kind({"tiny", 1, 4});
+        for (const char* category : {"mug", "bowl"}) {
+            esf::ModelEntry model;
+            model.category = category;
+            model.name = std::string(category) + "_1";
+            model.file = model.category + "/" + model.name + ".ply";
+            for (int v = 0; v < 2; ++v) {
+                esf::ViewEntry view;
+                view.index = v;
+                view.points = 100;
+                view.descriptors = {0.25f, 0.25f, 0.25f, 0.25f};
+                model.views.push_back(view);
+            }
+            esf::ViewEntry skipped;
+            skipped.index = 2;
+            skipped.skip_reason = "too few points";
+            model.views.push_back(skipped);
+            db.write_model(model, "tiny");
+        }
+        db.set_weights(std::vector<float>{1.f, 2.f}, "tiny");
+    }
+    write_file(dir / "seed.sqlite", read_file(path));
+    fs::remove(path);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::cerr << "usage: esf_fuzz_seeds OUT_DIR\n";
+        return 1;
+    }
+    try {
+        const fs::path root = argv[1];
+        pcd_seeds(root / "pcd");
+        ply_seeds(root / "ply_cloud");
+        xyz_seeds(root / "xyz");
+        depth_png_seeds(root / "depth_png");
+        csv_seeds(root);
+        database_seeds(root / "database");
+    } catch (const std::exception& e) {
+        std::cerr << "esf_fuzz_seeds: " << e.what() << "\n";
+        return 2;
+    }
+    return 0;
+}
