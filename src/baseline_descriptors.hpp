@@ -21,10 +21,6 @@ Points describable_points(std::span<const Eigen::Vector3f> points, const std::st
 /// negative, or the sum is 0.
 bool normalise_signature(Signature& signature);
 
-/// `info` with ESF's ten blocks of kEsfBins bins (esf_block_names()), then the `extra` blocks.
-DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_sizes = {},
-                               std::span<const char* const> extra_names = {});
-
 /// The baselines module (libesf_baselines.so, PCL inside): what it exports under the C name
 /// esf_baseline_module. Built from the same sources as the library that loads it; `abi` guards
 /// against a module of another build.

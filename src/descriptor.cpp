@@ -62,8 +62,13 @@ bool normalise_signature(Signature& signature) {
     return true;
 }
 
-DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_sizes,
-                               std::span<const char* const> extra_names) {
+}  // namespace detail
+
+namespace {
+
+/// `info` with ESF's ten blocks of kEsfBins bins (esf_block_names()), then the `extra` blocks.
+DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_sizes = {},
+                               std::span<const char* const> extra_names = {}) {
     for (const char* name : esf_block_names()) {
         info.blocks.push_back(kEsfBins);
         info.block_names.emplace_back(name);
@@ -72,12 +77,6 @@ DescriptorInfo with_esf_blocks(DescriptorInfo info, std::span<const int> extra_s
     info.block_names.insert(info.block_names.end(), extra_names.begin(), extra_names.end());
     return info;
 }
-
-}  // namespace detail
-
-namespace {
-
-using detail::with_esf_blocks;
 
 /// A registry entry without blocks (with_esf_blocks() or the caller adds them).
 DescriptorInfo make_info(std::string name, int dimension, bool multi_signature, bool deterministic,
