@@ -126,15 +126,66 @@ EsfOptions fast_esf_options(const DescriptorOptions& options) {
     return out;
 }
 
+constexpr std::array<int, kSurfaceAngleBlocks> kAngleBlockSizes = {
+    kSurfaceAngleBins, kSurfaceAngleBins,     kSurfaceAngleBins,
+    kSurfaceAngleBins, kSurfaceViewpointBins, kSurfaceVariationBins};
+constexpr std::array<const char*, kSurfaceAngleBlocks> kAngleBlockNames = {
+    "alpha", "phi", "theta", "s", "beta", "sigma"};
+
+/// What each baseline computes: known without loading the module.
+DescriptorInfo baseline_info(const std::string& name) {
+    constexpr int v = kBaselineDescriptorVersion;
+    if (name == "pcl-esf")
+        return with_esf_blocks(
+            make_info(name, kEsfSize, false, false,
+                      "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)", v));
+    if (name == "vfh") return make_info(name, 308, false, true, "PCL VFH (Rusu et al. 2010)", v);
+    if (name == "cvfh")
+        return make_info(name, 308, true, true,
+                         "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)", v);
+    if (name == "our-cvfh")
+        return make_info(name, 308, true, true,
+                         "PCL OUR-CVFH, one signature per region and reference frame (Aldoma et "
+                         "al. 2012)",
+                         v);
+    if (name == "gasd")
+        return make_info(name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", v);
+    return make_info(name, 352, false, true,
+                     "PCL SHOT at the centroid, radius covering the object (Tombari et al. 2010)",
+                     v);
+}
+
+/// What each registered descriptor computes (the name is checked by the caller).
+DescriptorInfo registered_info(const std::string& name) {
+    if (name == "esf")
+        return with_esf_blocks(make_info(
+            "esf", kEsfSize, false, true,
+            "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded",
+            kEsfVersion));
+    if (name == "sdvs")
+        return with_blocks(make_info("sdvs", 3 * kEsfBins, false, true,
+                                     "SDVS: D2 split by voxel-line class IN, OUT, "
+                                     "MIXED (Wohlkinger & Vincze 2011)",
+                                     kEsfVersion),
+                           {kEsfBins, kEsfBins, kEsfBins}, {"d2_in", "d2_out", "d2_mixed"});
+    if (name == "d2")
+        return make_info("d2", kEsfBins, false, true, "D2 shape distribution (Osada et al. 2002)",
+                         kEsfVersion);
+    if (name == "esf-angles")
+        return with_esf_blocks(
+            make_info("esf-angles", kEsfAnglesSize, false, true,
+                      "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms "
+                      "(VFH's angles, Rusu et al. 2010), seeded",
+                      kEsfVersion * 100 + kSurfaceAnglesVersion, 2),
+            kAngleBlockSizes, kAngleBlockNames);
+    return baseline_info(name);
+}
+
 /// Our ESF (esf_descriptor.hpp), fast sampler.
 class EsfGlobal final : public GlobalDescriptor {
   public:
     explicit EsfGlobal(const DescriptorOptions& options)
-        : info_(with_esf_blocks(make_info(
-              "esf", kEsfSize, false, true,
-              "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded",
-              kEsfVersion))),
-          pool_(fast_esf_options(options)) {}
+        : info_(registered_info("esf")), pool_(fast_esf_options(options)) {}
     const DescriptorInfo& info() const override { return info_; }
 
     std::vector<Signature> compute(std::span<const Eigen::Vector3f> points) const override {
@@ -157,13 +208,7 @@ class EsfGlobal final : public GlobalDescriptor {
 class D2Global final : public GlobalDescriptor {
   public:
     D2Global(const DescriptorOptions& options, bool split)
-        : info_(split ? with_blocks(make_info("sdvs", 3 * kEsfBins, false, true,
-                                              "SDVS: D2 split by voxel-line class IN, OUT, "
-                                              "MIXED (Wohlkinger & Vincze 2011)",
-                                              kEsfVersion),
-                                    {kEsfBins, kEsfBins, kEsfBins}, {"d2_in", "d2_out", "d2_mixed"})
-                      : make_info("d2", kEsfBins, false, true,
-                                  "D2 shape distribution (Osada et al. 2002)", kEsfVersion)),
+        : info_(registered_info(split ? "sdvs" : "d2")),
           pool_(fast_esf_options(options)),
           split_(split) {}
     const DescriptorInfo& info() const override { return info_; }
@@ -195,12 +240,6 @@ class D2Global final : public GlobalDescriptor {
     bool split_;
 };
 
-constexpr std::array<int, kSurfaceAngleBlocks> kAngleBlockSizes = {
-    kSurfaceAngleBins, kSurfaceAngleBins,     kSurfaceAngleBins,
-    kSurfaceAngleBins, kSurfaceViewpointBins, kSurfaceVariationBins};
-constexpr std::array<const char*, kSurfaceAngleBlocks> kAngleBlockNames = {
-    "alpha", "phi", "theta", "s", "beta", "sigma"};
-
 /// ESF followed by the six surface angle histograms (surface_angles.hpp): the ESF part keeps
 /// its shape, the histograms are weighted kEsfAnglesWeight in all, then the whole signature is
 /// L1-normalised. The L1 distance of two signatures is so (L1_esf + L1_angles) / (1 + weight),
@@ -208,12 +247,7 @@ constexpr std::array<const char*, kSurfaceAngleBlocks> kAngleBlockNames = {
 class EsfAnglesGlobal final : public GlobalDescriptor {
   public:
     explicit EsfAnglesGlobal(const DescriptorOptions& options)
-        : info_(with_esf_blocks(
-              make_info("esf-angles", kEsfAnglesSize, false, true,
-                        "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms "
-                        "(VFH's angles, Rusu et al. 2010), seeded",
-                        kEsfVersion * 100 + kSurfaceAnglesVersion, 2),
-              kAngleBlockSizes, kAngleBlockNames)),
+        : info_(registered_info("esf-angles")),
           pool_(fast_esf_options(options)),
           weight_(options.angles_weight) {}
     const DescriptorInfo& info() const override { return info_; }
@@ -277,29 +311,6 @@ bool is_baseline(const std::string& name) {
            name == "gasd" || name == "shot";
 }
 
-/// What each baseline computes: known without loading the module.
-DescriptorInfo baseline_info(const std::string& name) {
-    constexpr int v = kBaselineDescriptorVersion;
-    if (name == "pcl-esf")
-        return with_esf_blocks(
-            make_info(name, kEsfSize, false, false,
-                      "PCL 1.13 pcl::ESFEstimation (seeded from the clock: not reproducible)", v));
-    if (name == "vfh") return make_info(name, 308, false, true, "PCL VFH (Rusu et al. 2010)", v);
-    if (name == "cvfh")
-        return make_info(name, 308, true, true,
-                         "PCL CVFH, one signature per smooth region (Aldoma et al. 2011)", v);
-    if (name == "our-cvfh")
-        return make_info(name, 308, true, true,
-                         "PCL OUR-CVFH, one signature per region and reference frame (Aldoma et "
-                         "al. 2012)",
-                         v);
-    if (name == "gasd")
-        return make_info(name, 512, false, true, "PCL GASD, shape only (Lima & Teichrieb 2016)", v);
-    return make_info(name, 352, false, true,
-                     "PCL SHOT at the centroid, radius covering the object (Tombari et al. 2010)",
-                     v);
-}
-
 }  // namespace
 
 std::vector<std::string> descriptor_names() { return {kNames.begin(), kNames.end()}; }
@@ -335,7 +346,7 @@ bool descriptor_available(const std::string& name) {
 
 DescriptorInfo descriptor_info(const std::string& name) {
     check_name(name);
-    return is_baseline(name) ? baseline_info(name) : make_descriptor(name)->info();
+    return registered_info(name);
 }
 
 int stored_descriptor_version(const std::string& name) { return descriptor_info(name).version; }
