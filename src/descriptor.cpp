@@ -240,10 +240,14 @@ class D2Global final : public GlobalDescriptor {
     bool split_;
 };
 
-/// ESF followed by the six surface angle histograms (surface_angles.hpp): the ESF part keeps
-/// its shape, the histograms are weighted kEsfAnglesWeight in all, then the whole signature is
-/// L1-normalised. The L1 distance of two signatures is so (L1_esf + L1_angles) / (1 + weight),
-/// the weight setting how far the surface angles count next to ESF.
+/// ESF followed by the six surface angle histograms (surface_angles.hpp), every block with an
+/// equal share: each of ESF's ten sub-histograms is scaled to sum 1 / (10 (1 + weight)) and each
+/// angle histogram to weight / (6 (1 + weight)), so the signature sums to 1 and the L1 distance
+/// of two signatures is a weighted mean of the blocks' own L1 distances. ESF's raw blocks carry
+/// unequal mass (on the training views the three D2 blocks hold 0.14 to 0.23 each, the OUT
+/// blocks of A3 and D3 under 0.02), so a few blocks decided the distance; with equal shares every
+/// shape function counts the same (real views: +4 to +8 points of 1-NN, BENCHMARKS.md). The
+/// weight sets how far the surface angles count next to ESF.
 class EsfAnglesGlobal final : public GlobalDescriptor {
   public:
     explicit EsfAnglesGlobal(const DescriptorOptions& options)
@@ -260,11 +264,16 @@ class EsfAnglesGlobal final : public GlobalDescriptor {
         } catch (const std::invalid_argument& e) {
             throw std::invalid_argument(info_.name + ": " + e.what());
         }
-        const double scale = 1.0 / (1.0 + weight_);
-        const double angle_scale = scale * weight_ / kSurfaceAngleBlocks;
-        Signature signature(static_cast<std::size_t>(kEsfAnglesSize));
-        for (std::size_t i = 0; i < esf.descriptor.size(); ++i)
-            signature[i] = static_cast<float>(esf.descriptor[i] * scale);
+        Signature signature(static_cast<std::size_t>(kEsfAnglesSize), 0.0f);
+        const double block_share = 1.0 / (kEsfBlocks * (1.0 + weight_));
+        for (std::size_t begin = 0; begin < esf.descriptor.size(); begin += kEsfBins) {
+            double mass = 0.0;
+            for (std::size_t i = begin; i < begin + kEsfBins; ++i) mass += esf.descriptor[i];
+            if (mass <= 0.0) continue;  // an empty block (no OFF-surface line, say) stays empty
+            for (std::size_t i = begin; i < begin + kEsfBins; ++i)
+                signature[i] = static_cast<float>(esf.descriptor[i] / mass * block_share);
+        }
+        const double angle_scale = weight_ / (kSurfaceAngleBlocks * (1.0 + weight_));
         for (std::size_t i = 0; i < angles.size(); ++i)
             signature[esf.descriptor.size() + i] = static_cast<float>(angles[i] * angle_scale);
         return {std::move(signature)};

@@ -307,7 +307,7 @@ EvaluationReport evaluate_test_set(const Recognizer& recognizer, const TestSet& 
         const std::vector<KnnNeighbour> nearest =
             d.signatures.size() == dim
                 ? all
-                : detail::merge_signature_neighbours(std::move(all), options.k,
+                : detail::merge_signature_neighbours(std::move(all), options.k, index,
                                                      [](std::uint32_t) { return true; });
         match_s[w] = seconds_since(t);
         outcome.neighbours = outcome_neighbours(nearest, labels);
@@ -360,6 +360,7 @@ LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::stri
         model_group[m] = ids.emplace(name, static_cast<std::uint32_t>(ids.size())).first->second;
     }
     LomoSetup setup;
+    std::uint32_t model_number = 0;  // models in row order, numbered densely
     setup.row_views.resize(matrix.rows());
     setup.group_views.assign(ids.size(), 0);
     for (std::size_t r = 0; r < matrix.rows(); ++r) {
@@ -376,6 +377,9 @@ LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::stri
             setup.view_first_row.push_back(r);
             setup.view_category.push_back(row.category);
             setup.view_group.push_back(model_group[row.model]);
+            if (setup.view_model.empty() || row.model != matrix.row_info[r - 1].model)
+                model_number = setup.view_model.empty() ? 0 : model_number + 1;
+            setup.view_model.push_back(model_number);
             ++setup.group_views[model_group[row.model]];
         }
         setup.row_views[r] = static_cast<std::uint32_t>(setup.view_category.size() - 1);
@@ -404,9 +408,10 @@ std::vector<std::size_t> lomo_queries(std::size_t views, std::size_t max_queries
 }
 
 KnnIndex lomo_index(const DescriptorMatrix& matrix, const LomoSetup& setup,
-                    std::vector<float> weights, int threads) {
+                    std::vector<float> weights, int threads, bool per_model) {
     KnnIndexOptions options;
     options.weights = std::move(weights);
+    if (per_model) options.view_families = setup.view_model;
     options.threads = threads;
     options.sketch_group = descriptor_sketch_group(matrix.kind.name);
     const auto dim = static_cast<std::size_t>(matrix.kind.dimension);
@@ -433,7 +438,7 @@ std::vector<KnnNeighbour> lomo_search(const KnnIndex& index, const LomoSetup& se
         const KnnResult r = index.search(index.row(row), wanted);
         all.insert(all.end(), r.neighbours.begin(), r.neighbours.end());
     }
-    return merge_signature_neighbours(std::move(all), k, keep);
+    return merge_signature_neighbours(std::move(all), k, index, keep);
 }
 
 }  // namespace detail
@@ -487,7 +492,8 @@ EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
     const int threads = resolve_threads(options.threads);
     const auto start = std::chrono::steady_clock::now();
     const detail::LomoSetup setup = detail::lomo_setup(matrix, options.groups, what);
-    const KnnIndex index = detail::lomo_index(matrix, setup, options.weights, threads);
+    const KnnIndex index =
+        detail::lomo_index(matrix, setup, options.weights, threads, options.one_view_per_model);
     const std::vector<std::size_t> queries =
         detail::lomo_queries(setup.views(), options.max_queries);
 
@@ -530,7 +536,8 @@ EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const Descrip
     const detail::LomoSetup setup = detail::lomo_setup(matrix, options.groups, what);
     if (setup.multi_signature || queries.rows() == 0)
         throw std::invalid_argument(what + ": needs one signature per view and some queries");
-    const KnnIndex index = detail::lomo_index(matrix, setup, options.weights, threads);
+    const KnnIndex index =
+        detail::lomo_index(matrix, setup, options.weights, threads, options.one_view_per_model);
     // Group ids of the database's models by name, so a query's group is found by its name.
     // Without groups a model is its own group, named "category/name" in both matrices.
     const auto model_keys = [](const DescriptorMatrix& m) {

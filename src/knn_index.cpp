@@ -41,23 +41,32 @@ class TopViews {
     /// Rows whose lower bound exceeds this cannot enter.
     double threshold() const { return threshold_; }
 
-    void offer(std::uint32_t view, std::uint32_t row, double distance) {
+    /// A row of `view`, whose family (or the view itself) is `key`: one entry per key.
+    void offer(std::uint32_t key, std::uint32_t view, std::uint32_t row, double distance) {
         if (grouped_) {
-            const auto same = std::find_if(list_.begin(), list_.end(),
-                                           [&](const KnnNeighbour& n) { return n.view == view; });
-            if (same != list_.end()) {
-                // Rows may come in any order: keep the smallest distance, then the lowest row.
-                if (distance > same->distance || (distance == same->distance && row > same->row))
+            const auto same = std::find(keys_.begin(), keys_.end(), key);
+            const auto same_at = same - keys_.begin();
+            if (same != keys_.end()) {
+                const KnnNeighbour& held = list_[static_cast<std::size_t>(same_at)];
+                // Rows may come in any order: keep the smallest distance, then the lowest view
+                // (the order of the results), then the lowest row.
+                if (distance > held.distance ||
+                    (distance == held.distance &&
+                     (view > held.view || (view == held.view && row > held.row))))
                     return;
-                list_.erase(same);
+                list_.erase(list_.begin() + same_at);
+                keys_.erase(same);
             }
         }
         const KnnNeighbour candidate{view, row, distance};
         if (list_.size() == k_) {
             if (!before(candidate, list_.back())) return;
             list_.pop_back();
+            if (grouped_) keys_.pop_back();
         }
-        list_.insert(std::upper_bound(list_.begin(), list_.end(), candidate, before), candidate);
+        const auto at = std::upper_bound(list_.begin(), list_.end(), candidate, before);
+        if (grouped_) keys_.insert(keys_.begin() + (at - list_.begin()), key);
+        list_.insert(at, candidate);
         if (list_.size() == k_) threshold_ = list_.back().distance;
     }
 
@@ -72,6 +81,7 @@ class TopViews {
     bool grouped_;
     double threshold_ = kInf;
     std::vector<KnnNeighbour> list_;
+    std::vector<std::uint32_t> keys_;  ///< family (or view) of each entry of list_
 };
 
 /// Sketch of one row: values[j] = sum of w_i x_i over the `group` dimensions of sum j (zero in
@@ -183,9 +193,36 @@ void KnnIndex::build(std::span<const float> rows, std::size_t dimension,
                                     " value " + std::to_string(*bad % dimension) + " is " +
                                     describe_value(rows[*bad]));
 
+    std::size_t families = 0;
+    if (!options.view_families.empty()) {
+        if (options.view_families.size() != views)
+            throw std::invalid_argument(
+                "knn index: " + std::to_string(options.view_families.size()) +
+                " view families for " + std::to_string(views) + " views");
+        std::vector<bool> used;
+        for (const std::uint32_t f : options.view_families) {
+            if (f >= used.size()) {
+                if (f >= views)
+                    throw std::invalid_argument("knn index: family " + std::to_string(f) +
+                                                " out of range (" + std::to_string(views) +
+                                                " views)");
+                used.resize(std::size_t{f} + 1, false);
+            }
+            used[f] = true;
+        }
+        const auto gap = std::find(used.begin(), used.end(), false);
+        if (gap != used.end())
+            throw std::invalid_argument(
+                "knn index: family " + std::to_string(gap - used.begin()) +
+                " has no views (families must be numbered 0 .. F-1 without gaps)");
+        families = used.size();
+    }
+
     dimension_ = dimension;
     rows_ = count;
     views_ = views;
+    families_ = families;
+    view_families_ = options.view_families;
     kernel_ = options.kernel == KnnKernel::kAuto ? knn_best_kernel() : options.kernel;
     data_.assign(rows.begin(), rows.end());
     if (grouped) row_views_.assign(row_views.begin(), row_views.end());
@@ -305,15 +342,16 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
     // then exact distances for the other rows whose bound does not exceed the k-th distance,
     // in increasing bound order, until the next bound exceeds it. The result does not depend
     // on the order; the order only makes the k-th distance fall fast.
-    const std::size_t want = std::min(k, views_);
-    TopViews top(want, grouped());
+    const std::size_t want = std::min(k, has_families() ? families_ : views_);
+    TopViews top(want, grouped() || has_families());
     KnnResult result;
     using Candidate = std::pair<double, std::uint32_t>;  // (lower bound, row)
     const auto refine = [&](std::vector<Candidate>& candidates) {
         std::sort(candidates.begin(), candidates.end());
         for (const auto& [bound, row] : candidates) {
             if (bound > top.threshold()) break;
-            top.offer(view_of(row), row,
+            const std::uint32_t view = view_of(row);
+            top.offer(family_of(view), view, row,
                       kernels.exact(query.data(), data_.data() + row * dimension_, weights_.data(),
                                     dimension_));
             ++result.exact_distances;
@@ -343,8 +381,35 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
     std::vector<Candidate> candidates(below_cut.begin(), seeds_end);
     refine(candidates);
 
-    // The others whose bound does not exceed the k-th distance. With groups the seeds may
-    // share views and leave the threshold infinite: then every row is a candidate.
+    // With groups or families the seeds may share views or families and leave the threshold
+    // infinite: then the other rows are refined in batches of the smallest bounds, each twice
+    // the last, until `want` views or families are held.
+    if (top.threshold() == kInf) {
+        for (auto it = below_cut.begin(); it != seeds_end; ++it) bound[it->second] = kInf;
+        std::vector<Candidate> rest;
+        rows_below(kInf, rest);
+        std::erase_if(rest, [](const Candidate& c) { return c.first == kInf; });
+        auto begin = rest.begin();
+        for (std::size_t batch = 4 * want; top.threshold() == kInf && begin != rest.end();
+             batch *= 2) {
+            const auto end = rest.end() - begin > static_cast<std::ptrdiff_t>(batch)
+                                 ? begin + static_cast<std::ptrdiff_t>(batch)
+                                 : rest.end();
+            std::nth_element(begin, end - 1, rest.end());
+            candidates.assign(begin, end);
+            refine(candidates);
+            begin = end;
+        }
+        candidates.clear();
+        const double threshold = top.threshold();
+        std::copy_if(begin, rest.end(), std::back_inserter(candidates),
+                     [&](const Candidate& c) { return c.first <= threshold; });
+        refine(candidates);
+        result.neighbours = top.take();
+        return result;
+    }
+
+    // The others whose bound does not exceed the k-th distance.
     const double threshold = top.threshold();
     candidates.clear();
     if (threshold <= cut) {
@@ -389,7 +454,7 @@ double KnnIndex::distance(std::span<const float> query, std::size_t row) const {
 
 std::size_t KnnIndex::memory_bytes() const {
     return data_.size() * sizeof(float) + weights_.size() * sizeof(float) +
-           row_views_.size() * sizeof(std::uint32_t) + sketch_.size() +
+           (row_views_.size() + view_families_.size()) * sizeof(std::uint32_t) + sketch_.size() +
            row_error_.size() * sizeof(double) +
            (lane_offset_.size() + lane_scale_.size()) * sizeof(double) +
            lane_weight_.size() * sizeof(std::uint32_t);

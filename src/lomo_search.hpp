@@ -20,6 +20,7 @@ struct LomoSetup {
     std::vector<std::size_t> view_first_row;   ///< views + 1 offsets into the rows
     std::vector<std::uint32_t> view_category;  ///< category of each view
     std::vector<std::uint32_t> view_group;     ///< group id of each view
+    std::vector<std::uint32_t> view_model;     ///< model of each view, numbered 0 .. M-1
     std::vector<std::size_t> group_views;      ///< views per group id
     bool multi_signature = false;              ///< some view has several rows
 
@@ -35,9 +36,10 @@ LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::stri
 /// Query views: all (max_queries = 0 or >= views) or floor(i * views / max_queries).
 std::vector<std::size_t> lomo_queries(std::size_t views, std::size_t max_queries);
 
-/// One index over every row of `matrix`, grouped by view when views have several rows.
+/// One index over every row of `matrix`, grouped by view when views have several rows; with
+/// `per_model` its searches return one view per model (KnnIndexOptions::view_families).
 KnnIndex lomo_index(const DescriptorMatrix& matrix, const LomoSetup& setup,
-                    std::vector<float> weights, int threads);
+                    std::vector<float> weights, int threads, bool per_model);
 
 /// The k nearest views of view `query` among the views of the other groups, by (distance, view):
 /// exactly brute force. A multi-signature view's distance is the minimum over signature pairs.

@@ -172,12 +172,13 @@ std::unique_ptr<Describer> make_describer(const QuerySetup& setup, int samplings
 }
 
 /// Merges the k nearest views of each query signature into the k nearest views of the query:
-/// a view's distance is its smallest over the signatures (ties: the lower row).
-std::vector<KnnNeighbour> merge_neighbours(const std::vector<KnnResult>& results, std::size_t k) {
+/// a view's distance is its smallest over the signatures (ties: the lower row); one per model.
+std::vector<KnnNeighbour> merge_neighbours(const std::vector<KnnResult>& results, std::size_t k,
+                                           const KnnIndex& index) {
     std::vector<KnnNeighbour> all;
     for (const KnnResult& r : results)
         all.insert(all.end(), r.neighbours.begin(), r.neighbours.end());
-    return detail::merge_signature_neighbours(std::move(all), k,
+    return detail::merge_signature_neighbours(std::move(all), k, index,
                                               [](std::uint32_t) { return true; });
 }
 
@@ -350,6 +351,15 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
         }
         row_views[r] = static_cast<std::uint32_t>(labels.size() - 1);
     }
+    if (options.one_view_per_model) {
+        // Models numbered densely in view order (the matrix holds a model's views together).
+        index_options.view_families.reserve(labels.size());
+        std::uint32_t family = 0;
+        for (std::size_t v = 0; v < labels.size(); ++v) {
+            if (v > 0 && labels[v].model_id != labels[v - 1].model_id) ++family;
+            index_options.view_families.push_back(family);
+        }
+    }
     KnnIndex index = grouped ? KnnIndex(matrix.data, dim, row_views, index_options)
                              : KnnIndex(matrix.data, dim, index_options);
     impl_->info.database = path;
@@ -401,7 +411,8 @@ Classification Recognizer::classify_descriptor(std::span<const float> signatures
     std::vector<KnnResult> results;
     for (std::size_t s = 0; s < signatures.size(); s += dim)
         results.push_back(classifier.index().search(signatures.subspan(s, dim), impl_->options.k));
-    const std::vector<KnnNeighbour> neighbours = merge_neighbours(results, impl_->options.k);
+    const std::vector<KnnNeighbour> neighbours =
+        merge_neighbours(results, impl_->options.k, classifier.index());
     return classify_neighbours(neighbours, classifier.labels());
 }
 

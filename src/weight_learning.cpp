@@ -57,7 +57,8 @@ Exact exact_objective(const DescriptorMatrix& matrix, const detail::LomoSetup& s
         block_begin[b + 1] = block_begin[b] + block_sizes[b];
         dimension_weights.insert(dimension_weights.end(), block_sizes[b], w[b]);
     }
-    const KnnIndex index = detail::lomo_index(matrix, setup, dimension_weights, threads);
+    const KnnIndex index =
+        detail::lomo_index(matrix, setup, dimension_weights, threads, /*per_model=*/false);
     Exact out;
     CandidateSet& set = out.candidates;
     set.query_weight = query_weight;

@@ -375,9 +375,19 @@ TEST(EsfAnglesDescriptor, IsEsfThenTheWeightedSurfaceAngles) {
     esf_options.samples = 5000;
     const auto esf = esf::compute_esf(points, esf_options).descriptor;
     const auto angles = esf::compute_surface_angles(points);
-    // ESF scaled by 1 / 1.5, each of the six angle histograms by 0.5 / 6 / 1.5.
-    for (std::size_t i = 0; i < esf.size(); ++i)
-        EXPECT_FLOAT_EQ(signatures[0][i], esf[i] / 1.5f) << i;
+    // Each of ESF's ten blocks scaled to sum 1 / 10 / 1.5 (its shape kept), each of the six
+    // angle histograms by 0.5 / 6 / 1.5.
+    for (std::size_t begin = 0; begin < esf.size(); begin += esf::kEsfBins) {
+        double mass = 0.0, scaled = 0.0;
+        for (std::size_t i = begin; i < begin + esf::kEsfBins; ++i) {
+            mass += esf[i];
+            scaled += signatures[0][i];
+        }
+        ASSERT_GT(mass, 0.0) << begin;
+        EXPECT_NEAR(scaled, 1.0 / 10.0 / 1.5, 1e-6) << begin;
+        for (std::size_t i = begin; i < begin + esf::kEsfBins; ++i)
+            EXPECT_NEAR(signatures[0][i], esf[i] / mass / 10.0 / 1.5, 1e-7) << i;
+    }
     for (std::size_t i = 0; i < angles.size(); ++i)
         EXPECT_NEAR(signatures[0][esf.size() + i], angles[i] * 0.5f / 6.0f / 1.5f, 1e-7f) << i;
     options.angles_weight = -1.0;

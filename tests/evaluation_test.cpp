@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -260,10 +261,12 @@ struct OracleNeighbour {
     double distance;
 };
 
-/// Brute force: the k nearest views of view `query` outside its group, by (distance, view).
+/// Brute force: the k nearest views of view `query` outside its group, by (distance, view);
+/// with `per_model` only the first of each model's views in that order.
 std::vector<OracleNeighbour> oracle(const esf::DescriptorMatrix& m,
                                     const esf::detail::LomoSetup& setup, std::size_t query,
-                                    std::size_t k, const std::vector<float>& weights) {
+                                    std::size_t k, const std::vector<float>& weights,
+                                    bool per_model) {
     const auto dim = static_cast<std::size_t>(m.kind.dimension);
     std::vector<OracleNeighbour> all;
     for (std::size_t v = 0; v < setup.views(); ++v) {
@@ -283,15 +286,25 @@ std::vector<OracleNeighbour> oracle(const esf::DescriptorMatrix& m,
     std::sort(all.begin(), all.end(), [](const OracleNeighbour& x, const OracleNeighbour& y) {
         return x.distance != y.distance ? x.distance < y.distance : x.view < y.view;
     });
+    if (per_model) {
+        std::vector<OracleNeighbour> first;
+        std::set<std::uint32_t> seen;
+        for (const OracleNeighbour& n : all)
+            if (seen.insert(m.row_info[setup.view_first_row[n.view]].model).second)
+                first.push_back(n);
+        all = std::move(first);
+    }
     if (all.size() > k) all.resize(k);
     return all;
 }
 
 void expect_matches_oracle(const esf::DescriptorMatrix& m, const std::vector<std::string>& groups,
-                           const std::vector<float>& weights, std::size_t k) {
+                           const std::vector<float>& weights, std::size_t k, bool per_model) {
+    SCOPED_TRACE(per_model ? "one view per model" : "every view");
     const esf::detail::LomoSetup setup = esf::detail::lomo_setup(m, groups, "test");
-    const esf::KnnIndex index = esf::detail::lomo_index(m, setup, weights, 1);
+    const esf::KnnIndex index = esf::detail::lomo_index(m, setup, weights, 1, per_model);
     esf::SyntheticOptions options;
+    options.one_view_per_model = per_model;
     options.k = k;
     options.groups = groups;
     options.weights = weights;
@@ -299,7 +312,7 @@ void expect_matches_oracle(const esf::DescriptorMatrix& m, const std::vector<std
     const EvaluationReport report = esf::evaluate_synthetic(m, options);
     ASSERT_EQ(report.queries.size(), setup.views());
     for (std::size_t q = 0; q < setup.views(); ++q) {
-        const std::vector<OracleNeighbour> expected = oracle(m, setup, q, k, weights);
+        const std::vector<OracleNeighbour> expected = oracle(m, setup, q, k, weights, per_model);
         const std::vector<esf::KnnNeighbour> got = esf::detail::lomo_search(index, setup, q, k);
         ASSERT_EQ(got.size(), expected.size()) << "query " << q;
         for (std::size_t j = 0; j < got.size(); ++j) {
@@ -320,7 +333,8 @@ void expect_matches_oracle(const esf::DescriptorMatrix& m, const std::vector<std
 
 TEST(EvaluateSynthetic, LeaveOneModelOutEqualsBruteForce) {
     const esf::DescriptorMatrix m = random_matrix(3, 4, 6, 48, 1, 7);
-    expect_matches_oracle(m, {}, {}, 5);
+    expect_matches_oracle(m, {}, {}, 5, false);
+    expect_matches_oracle(m, {}, {}, 5, true);
 }
 
 TEST(EvaluateSynthetic, MultiSignatureWeightedGroupsEqualBruteForce) {
@@ -331,8 +345,10 @@ TEST(EvaluateSynthetic, MultiSignatureWeightedGroupsEqualBruteForce) {
     std::mt19937_64 rng(3);
     std::uniform_real_distribution<float> u(0.0f, 2.0f);
     for (float& w : weights) w = u(rng);
-    expect_matches_oracle(m, groups, weights, 7);
-    expect_matches_oracle(m, {}, weights, 3);
+    for (const bool per_model : {false, true}) {
+        expect_matches_oracle(m, groups, weights, 7, per_model);
+        expect_matches_oracle(m, {}, weights, 3, per_model);
+    }
 }
 
 TEST(EvaluateSynthetic, GroupsLeaveTwinsOut) {

@@ -310,6 +310,77 @@ TEST(KnnIndex, GroupsMatchBruteForce) {
     }
 }
 
+/// Brute force with families: the per-view brute force, then the first view of each family.
+std::vector<KnnNeighbour> brute_force_families(const std::vector<float>& rows, std::size_t dim,
+                                               const std::vector<std::uint32_t>& row_views,
+                                               const std::vector<std::uint32_t>& families,
+                                               std::span<const float> query, std::size_t k) {
+    const std::vector<KnnNeighbour> views =
+        brute_force(rows, dim, row_views, query, {}, rows.size() / dim);
+    std::vector<KnnNeighbour> best;
+    std::vector<bool> seen(families.size(), false);
+    for (const KnnNeighbour& n : views) {
+        if (seen[families[n.view]]) continue;
+        seen[families[n.view]] = true;
+        if (best.size() < k) best.push_back(n);
+    }
+    return best;
+}
+
+TEST(KnnIndex, FamiliesKeepTheNearestViewOfEach) {
+    // 1-D views 0..4 at 0, 1, 2, 3, 10; families {0, 0, 1, 1, 2}. Query 2.4: views by distance
+    // 2 (0.4), 3 (0.6), 1 (1.4), 0 (2.4), 4 (7.6) -> families 1 via view 2, 0 via view 1, 2.
+    const std::vector<float> rows = {0.0f, 1.0f, 2.0f, 3.0f, 10.0f};
+    KnnIndexOptions options;
+    options.view_families = {0, 0, 1, 1, 2};
+    const KnnIndex index(rows, 1, options);
+    EXPECT_EQ(index.families(), 3u);
+    EXPECT_EQ(index.family_of(3), 1u);
+    const std::vector<float> query = {2.4f};
+    const auto found = index.search(query, 5).neighbours;
+    ASSERT_EQ(found.size(), 3u);
+    EXPECT_EQ(found[0].view, 2u);
+    EXPECT_EQ(found[1].view, 1u);
+    EXPECT_EQ(found[2].view, 4u);
+    EXPECT_NEAR(found[1].distance, 1.4, 1e-6);
+    EXPECT_EQ(index.search(query, 1).neighbours.at(0).view, 2u);
+}
+
+TEST(KnnIndex, FamiliesMatchBruteForce) {
+    const std::size_t dim = 64, n = 3000;
+    const std::vector<float> rows = rows_with_duplicates(n, dim, 41);
+    std::mt19937 rng(43);
+    // Without groups: 3000 views in 60 families of 50 (consecutive, as a database's models);
+    // with groups: 1000 views of 3 rows each (scattered), families of 1 to 40 views.
+    std::vector<std::uint32_t> consecutive(n), row_views(n), grouped_families(1000);
+    for (std::size_t v = 0; v < n; ++v) consecutive[v] = static_cast<std::uint32_t>(v / 50);
+    for (std::size_t r = 0; r < n; ++r) row_views[r] = static_cast<std::uint32_t>(r % 1000);
+    std::shuffle(row_views.begin(), row_views.end(), rng);
+    for (std::size_t v = 0; v < 1000; ++v)
+        grouped_families[v] = static_cast<std::uint32_t>(v < 40 ? 0 : 1 + (v - 40) % 80);
+    const std::vector<float> queries = make_queries(rows, dim, 47);
+    for (KnnKernel kernel : supported_kernels()) {
+        for (const bool grouped : {false, true}) {
+            KnnIndexOptions options;
+            options.kernel = kernel;
+            options.view_families = grouped ? grouped_families : consecutive;
+            const KnnIndex index =
+                grouped ? KnnIndex(rows, dim, row_views, options) : KnnIndex(rows, dim, options);
+            const std::vector<std::uint32_t> no_groups;
+            for (std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{100}}) {
+                for (std::size_t q = 0; q < queries.size() / dim; ++q) {
+                    const std::span<const float> query(queries.data() + q * dim, dim);
+                    expect_same(index.search(query, k).neighbours,
+                                brute_force_families(rows, dim, grouped ? row_views : no_groups,
+                                                     options.view_families, query, k),
+                                std::string(grouped ? "grouped" : "rows") + " k " +
+                                    std::to_string(k) + " query " + std::to_string(q));
+                }
+            }
+        }
+    }
+}
+
 TEST(KnnIndex, OddDataStaysExact) {
     // Negative values, constant dimensions, queries far outside the indexed range, every
     // sketch grouping from 1 to the whole row.
@@ -546,6 +617,18 @@ TEST(KnnIndexErrors, BadIndexInput) {
               "thread count must be >= 0 (0 = all cores), got -2");
     const std::vector<std::uint32_t> two_views = {0, 1};
     EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, two_views); }), "knn index: 2 view ids for 3 rows");
+    options.threads = 0;
+    options.view_families = {0, 1};
+    EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, options); }),
+              "knn index: 2 view families for 3 views");
+    options.view_families = {0, 2, 2};
+    EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, options); }),
+              "knn index: family 1 has no views (families must be numbered 0 .. F-1 without "
+              "gaps)");
+    options.view_families = {0, 7, 0};
+    EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, options); }),
+              "knn index: family 7 out of range (3 views)");
+    options.view_families.clear();
     const std::vector<std::uint32_t> gap = {0, 2, 2};
     EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, gap); }),
               "knn index: view 1 has no rows (views must be numbered 0 .. V-1 without gaps)");

@@ -151,7 +151,8 @@ TEST_F(RecognizerTest, HeldOutViewsAreClassified) {
             EXPECT_EQ(c.best_model, shape + "_a");
             EXPECT_GE(c.confidence, 0.5);
             EXPECT_LE(c.confidence, 1.0);
-            ASSERT_EQ(c.neighbours.size(), 10u);
+            // One neighbour per model by default: fewer than 10 models, all of them.
+            ASSERT_EQ(c.neighbours.size(), std::min<std::size_t>(10, recognizer.info().models));
             // The best view is the nearest neighbour of the winning class, with its stored pose.
             const auto nearest = std::find_if(c.neighbours.begin(), c.neighbours.end(),
                                               [&](const auto& n) { return n.class_name == shape; });
@@ -216,32 +217,42 @@ TEST_F(RecognizerTest, NeighboursEqualBruteForceL1) {
                                        1.0f, 0.25f, 3.0f, 1.0f, 0.75f};
     esf::Database(weighted_path, esf::OpenMode::kWrite).set_weights(blocks);
 
-    for (const bool weighted : {false, true}) {
-        SCOPED_TRACE(weighted ? "weighted" : "unweighted");
-        const esf::Recognizer recognizer(weighted ? weighted_path : db_path_);
-        EXPECT_EQ(recognizer.info().weighted, weighted);
-        std::vector<float> weights;
-        if (weighted)
-            for (const float w : blocks) weights.insert(weights.end(), esf::kEsfBins, w);
-        for (const auto& shape : kShapes) {
-            const esf::Points view = held_out_view(shape, kHeldOut[2], 3);
-            const esf::QueryDescriptor q = recognizer.describe(view);
-            ASSERT_TRUE(q.ok());
-            const esf::Classification c = recognizer.classify_descriptor(q.signatures);
-            const std::vector<BruteForceRow> expected = brute_force(m, q.signatures, weights);
-            ASSERT_EQ(c.neighbours.size(), 10u);
-            for (std::size_t n = 0; n < c.neighbours.size(); ++n) {
-                const esf::DescriptorRow& row = m.row_info[expected[n].row];
-                EXPECT_EQ(c.neighbours[n].class_name, m.categories[row.category]) << n;
-                EXPECT_EQ(c.neighbours[n].model_name, m.models[row.model].name) << n;
-                EXPECT_EQ(c.neighbours[n].view, row.view_index) << n;
-                EXPECT_NEAR(c.neighbours[n].distance, expected[n].distance,
-                            1e-9 * expected[n].distance)
-                    << n;
-                EXPECT_TRUE(c.neighbours[n].pose.isApprox(row.pose)) << n;
+    for (const bool weighted : {false, true})
+        for (const bool per_model : {false, true}) {
+            SCOPED_TRACE(weighted ? "weighted" : "unweighted");
+            SCOPED_TRACE(per_model ? "one view per model" : "every view");
+            esf::RecognizerOptions options;
+            options.one_view_per_model = per_model;
+            const esf::Recognizer recognizer(weighted ? weighted_path : db_path_, options);
+            EXPECT_EQ(recognizer.info().weighted, weighted);
+            std::vector<float> weights;
+            if (weighted)
+                for (const float w : blocks) weights.insert(weights.end(), esf::kEsfBins, w);
+            for (const auto& shape : kShapes) {
+                const esf::Points view = held_out_view(shape, kHeldOut[2], 3);
+                const esf::QueryDescriptor q = recognizer.describe(view);
+                ASSERT_TRUE(q.ok());
+                const esf::Classification c = recognizer.classify_descriptor(q.signatures);
+                std::vector<BruteForceRow> expected = brute_force(m, q.signatures, weights);
+                if (per_model) {  // the first (nearest) row of each model
+                    std::set<std::uint32_t> seen;
+                    std::erase_if(expected, [&](const BruteForceRow& r) {
+                        return !seen.insert(m.row_info[r.row].model).second;
+                    });
+                }
+                ASSERT_EQ(c.neighbours.size(), std::min<std::size_t>(10, expected.size()));
+                for (std::size_t n = 0; n < c.neighbours.size(); ++n) {
+                    const esf::DescriptorRow& row = m.row_info[expected[n].row];
+                    EXPECT_EQ(c.neighbours[n].class_name, m.categories[row.category]) << n;
+                    EXPECT_EQ(c.neighbours[n].model_name, m.models[row.model].name) << n;
+                    EXPECT_EQ(c.neighbours[n].view, row.view_index) << n;
+                    EXPECT_NEAR(c.neighbours[n].distance, expected[n].distance,
+                                1e-9 * expected[n].distance)
+                        << n;
+                    EXPECT_TRUE(c.neighbours[n].pose.isApprox(row.pose)) << n;
+                }
             }
         }
-    }
     fs::remove_all(dir);
 }
 
@@ -478,7 +489,10 @@ TEST(RecognizerMultiSignature, ViewDistanceIsTheBestPairOfSignatures) {
     write_random_database(path, kind, {{"descriptor", std::string("cvfh")}}, 6, 12, 3);
     esf::RecognizerOptions options;
     options.k = 7;
+    options.one_view_per_model = false;
     const esf::Recognizer recognizer(path, options);
+    options.one_view_per_model = true;
+    const esf::Recognizer per_model(path, options);
     EXPECT_EQ(recognizer.info().views, 72u);
     EXPECT_EQ(recognizer.info().rows, 72u / 3 * (1 + 2 + 3));
     EXPECT_TRUE(recognizer.classifier().index().grouped());
@@ -500,6 +514,18 @@ TEST(RecognizerMultiSignature, ViewDistanceIsTheBestPairOfSignatures) {
             EXPECT_EQ(c.neighbours[n].model_name, m.models[expected[n].model].name);
             EXPECT_EQ(c.neighbours[n].view, expected[n].view);
             EXPECT_NEAR(c.neighbours[n].distance, expected[n].distance, 1e-9);
+        }
+        // One view per model: the nearest view of each of the 6 models.
+        std::vector<BruteForceView> first;
+        std::set<std::uint32_t> seen;
+        for (const BruteForceView& v : expected)
+            if (seen.insert(v.model).second) first.push_back(v);
+        const esf::Classification p = per_model.classify_descriptor(query);
+        ASSERT_EQ(p.neighbours.size(), 6u);
+        for (std::size_t n = 0; n < 6; ++n) {
+            EXPECT_EQ(p.neighbours[n].model_name, m.models[first[n].model].name);
+            EXPECT_EQ(p.neighbours[n].view, first[n].view);
+            EXPECT_NEAR(p.neighbours[n].distance, first[n].distance, 1e-9);
         }
     }
     fs::remove_all(dir);
@@ -556,8 +582,10 @@ TEST_F(RecognizerTest, BaselineDescriptorDatabaseEndToEnd) {
         ASSERT_TRUE(q.ok()) << q.error;
         EXPECT_EQ(q.signatures, expected);
         const esf::Classification c = recognizer.classify(view);
-        const std::vector<BruteForceView> truth = brute_force_views(m, q.signatures);
-        ASSERT_EQ(c.neighbours.size(), 10u);
+        std::vector<BruteForceView> truth = brute_force_views(m, q.signatures);
+        std::set<std::uint32_t> seen;  // one view per model (the default)
+        std::erase_if(truth, [&](const BruteForceView& v) { return !seen.insert(v.model).second; });
+        ASSERT_EQ(c.neighbours.size(), std::min<std::size_t>(10, truth.size()));
         for (std::size_t n = 0; n < c.neighbours.size(); ++n) {
             EXPECT_EQ(c.neighbours[n].model_name, m.models[truth[n].model].name) << n;
             EXPECT_EQ(c.neighbours[n].view, truth[n].view) << n;
@@ -603,7 +631,8 @@ TEST_F(RecognizerTest, SyntheticSceneWithTwoObjects) {
             const Eigen::Vector3d world = camera.inverse() * o.cluster.centroid.cast<double>();
             const std::string truth = world.y() > 0 ? "mug" : "bowl";
             EXPECT_EQ(o.classification.class_name, truth) << "centroid " << world.transpose();
-            EXPECT_EQ(o.classification.neighbours.size(), 10u);
+            EXPECT_EQ(o.classification.neighbours.size(),
+                      std::min<std::size_t>(10, recognizer.info().models));
             EXPECT_GT(o.cluster.points.size(), 300u);
         }
     }

@@ -16,6 +16,7 @@ struct RecognizerArgs {
     std::string database;
     RecognizerOptions options;
     bool no_weights = false;
+    bool every_view = false;
 };
 
 /// DB positional, -k, --descriptor, --no-weights, --threads. `args` must outlive `cmd`.
@@ -24,13 +25,16 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
         ->required()
         ->check(CLI::ExistingFile);
     cmd.add_option("-k", args.options.k,
-                   "Nearest views that vote (1: the class of the nearest view)")
+                   "Nearest models that vote, each by its nearest view (1: the nearest view)")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     cmd.add_option("--descriptor", args.options.descriptor,
                    "Descriptor kind to use when the database holds several");
     cmd.add_flag("--no-weights", args.no_weights,
                  "Ignore the database's learned sub-histogram weights (plain L1)");
+    cmd.add_flag("--every-view", args.every_view,
+                 "The k nearest views vote, several of one model among them (default: one view "
+                 "per model)");
     cmd.add_option("--samplings", args.options.query_samplings,
                    "ESF: describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))
@@ -44,6 +48,7 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
 inline RecognizerOptions recognizer_options(const RecognizerArgs& args) {
     RecognizerOptions options = args.options;
     options.use_weights = !args.no_weights;
+    options.one_view_per_model = !args.every_view;
     return options;
 }
 

@@ -31,6 +31,7 @@ struct EvalArgs {
     std::size_t k = 10;
     std::string descriptor;
     bool no_weights = false;
+    bool every_view = false;
     int samplings = 1;
     std::string queries;
     int threads = 0;
@@ -55,6 +56,7 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.k = args.k;
     options.descriptor = args.descriptor;
     options.use_weights = !args.no_weights;
+    options.one_view_per_model = !args.every_view;
     options.query_samplings = args.samplings;
     options.threads = args.threads;
     return options;
@@ -175,6 +177,7 @@ void run_eval(const EvalArgs& args) {
         options.k = args.k;
         options.threads = args.threads;
         options.max_queries = args.max_queries;
+        options.one_view_per_model = !args.every_view;
         options.groups = cli_model_groups(matrix, args.groups);
         if (!args.no_weights) {
             options.weights = stored_dimension_weights(db, matrix);
@@ -298,13 +301,18 @@ void add_eval_command(CLI::App& app) {
     cmd->add_option("testset", args->test_set,
                     "Test set CSV with file and class columns (not with --synthetic)")
         ->check(CLI::ExistingFile);
-    cmd->add_option("-k", args->k, "Nearest views per query for the k-NN accuracy and rank curve")
+    cmd->add_option("-k", args->k,
+                    "Nearest models per query (each by its nearest view) for the k-NN accuracy "
+                    "and rank curve")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
     cmd->add_option("--descriptor", args->descriptor,
                     "Descriptor kind to evaluate when the database holds several");
     cmd->add_flag("--no-weights", args->no_weights,
                   "Ignore the database's learned sub-histogram weights (plain L1)");
+    cmd->add_flag("--every-view", args->every_view,
+                  "Rank the k nearest views, several of one model among them (the paper's "
+                  "ranks; default: one view per model)");
     cmd->add_option("--samplings", args->samplings,
                     "ESF: describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))

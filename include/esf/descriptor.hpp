@@ -56,12 +56,13 @@ namespace esf {
 
 /// The version train() stores for the baselines (DescriptorInfo::version).
 inline constexpr int kBaselineDescriptorVersion = 1;
-/// Version of the surface angle part of "esf-angles"; that descriptor's stored version is
-/// kEsfVersion * 100 + this, so that a change of either part is refused.
-inline constexpr int kSurfaceAnglesVersion = 1;
+/// Version of what "esf-angles" adds to ESF (the surface angle histograms and how the blocks are
+/// scaled); that descriptor's stored version is kEsfVersion * 100 + this, so that a change of
+/// either part is refused. 1: ESF's blocks as ESF scales them; 2: every ESF block an equal share.
+inline constexpr int kSurfaceAnglesVersion = 2;
 
-/// "esf-angles": ESF's 640 bins, then the surface angle histograms, weighted kEsfAnglesWeight
-/// against ESF's 1 before the signature is normalised to sum 1.
+/// "esf-angles": ESF's ten 64-bin blocks, each scaled to an equal share, then the six surface
+/// angle histograms, weighted kEsfAnglesWeight in all against ESF's 1; the signature sums to 1.
 inline constexpr int kEsfAnglesSize = kEsfSize + kSurfaceAngleSize;
 inline constexpr double kEsfAnglesWeight = 1.0;
 

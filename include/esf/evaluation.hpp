@@ -10,6 +10,11 @@
 //   outcomes -> evaluate(): 1-NN and k-NN accuracy per sample and per class, the most confused
 //              class (the paper's Table I), a confusion matrix and rank curves (Figs. 15-18).
 //
+// Neighbours: by default the k nearest models, each by its nearest view (one view per model;
+// RecognizerOptions / SyntheticOptions::one_view_per_model), so the ten nearest are ten models
+// rather than ten views of one or two; with one_view_per_model = false the k nearest views (the
+// paper's ranks). The 1-NN is the same either way.
+//
 // Definitions (k = EvaluationReport::k):
 //   rank of a query   1-based position of the first of its k nearest views whose class is the
 //                     query's true class; 0 when none of them has it
@@ -216,6 +221,9 @@ struct SyntheticOptions {
     /// Queries: 0 = every view; otherwise at most this many views, evenly spaced over the
     /// matrix's view order (view floor(i * views / max_queries)), so the subset is deterministic.
     std::size_t max_queries = 0;
+    /// The k nearest models, each by its nearest view (as Recognizer does by default); false:
+    /// the k nearest views, several of one model among them (the paper's ranks).
+    bool one_view_per_model = true;
     int threads = 0;  ///< 0 = all cores
     EvaluationProgress progress;
 };

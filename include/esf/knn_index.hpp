@@ -34,6 +34,10 @@
 // distance is then the minimum over its rows, as in PCL's recognition pipeline, and the results
 // are views, each reported with the row that attained the minimum.
 //
+// Families: views may also belong to families (e.g. the models of a database, whose views are
+// alike); a search with families returns at most one view per family, its nearest, so the k
+// results are the k nearest families, each by its nearest view and row.
+//
 // Memory per view (one row each): 4 * dimension bytes (the float row) + the sketch (64 bytes for
 // any dimension up to 4096 with the default group) + 8 bytes (its quantisation error): 2,632
 // bytes for ESF; + 4 bytes per row with groups. A search also allocates 8 bytes per row for the
@@ -70,6 +74,9 @@ struct KnnIndexOptions {
     /// of every row (the tightest bound, but `dimension` bytes per row to scan).
     int sketch_group = 0;
     KnnKernel kernel = KnnKernel::kAuto;
+    /// Family of each view (one per view; numbered 0 .. F-1 without gaps); empty = none. A
+    /// search then returns at most one view per family (see the header).
+    std::vector<std::uint32_t> view_families;
     /// Threads used while building (0 = all cores).
     int threads = 0;
 };
@@ -110,8 +117,10 @@ class KnnIndex {
     KnnIndex(std::span<const float> rows, std::size_t dimension,
              std::span<const std::uint32_t> row_views, const KnnIndexOptions& options = {});
 
-    /// The k nearest views (fewer when the index has fewer views). Throws std::invalid_argument
-    /// for an empty index, k = 0, a query of the wrong dimension or with non-finite values.
+    /// The k nearest views (fewer when the index has fewer views), with families the nearest
+    /// view of each of the k nearest families (fewer when it has fewer). Throws
+    /// std::invalid_argument for an empty index, k = 0, a query of the wrong dimension or with
+    /// non-finite values.
     KnnResult search(std::span<const float> query, std::size_t k) const;
 
     /// Searches queries.size() / dimension() queries (row-major) on `threads` threads
@@ -130,6 +139,13 @@ class KnnIndex {
     /// View of row `row`.
     std::uint32_t view_of(std::size_t row) const {
         return row_views_.empty() ? static_cast<std::uint32_t>(row) : row_views_[row];
+    }
+    /// Families (0 without).
+    std::size_t families() const { return families_; }
+    bool has_families() const { return !view_families_.empty(); }
+    /// Family of view `view` (the view itself without families).
+    std::uint32_t family_of(std::uint32_t view) const {
+        return view_families_.empty() ? view : view_families_[view];
     }
     std::span<const float> row(std::size_t row) const {
         return {data_.data() + row * dimension_, dimension_};
@@ -156,6 +172,8 @@ class KnnIndex {
     std::size_t dimension_ = 0;
     std::size_t rows_ = 0;
     std::size_t views_ = 0;
+    std::size_t families_ = 0;
+    std::vector<std::uint32_t> view_families_;
     std::vector<float> data_;
     std::vector<float> weights_;
     std::vector<std::uint32_t> row_views_;
