@@ -8,8 +8,18 @@
 
 namespace esf {
 
+const char* to_string(VoteRule rule) {
+    return rule == VoteRule::kMajority ? "majority" : "nearest";
+}
+
+VoteRule parse_vote_rule(const std::string& name) {
+    if (name == "nearest") return VoteRule::kNearest;
+    if (name == "majority") return VoteRule::kMajority;
+    throw std::invalid_argument("unknown vote rule '" + name + "' (nearest or majority)");
+}
+
 Classification classify_neighbours(std::span<const KnnNeighbour> neighbours,
-                                   std::span<const ViewLabel> labels) {
+                                   std::span<const ViewLabel> labels, VoteRule rule) {
     if (neighbours.empty()) throw std::invalid_argument("classify: no neighbours to vote");
     Classification result;
     result.neighbours.reserve(neighbours.size());
@@ -38,13 +48,18 @@ Classification classify_neighbours(std::span<const KnnNeighbour> neighbours,
         ++it->vote.votes;
         it->vote.distance_sum += n.distance;
     }
-    // More votes first; then the smaller distance sum; then the nearer first view.
-    std::sort(tallies.begin(), tallies.end(), [](const Tally& a, const Tally& b) {
+    // More votes first; then the smaller distance sum; then the nearer first view. The nearest
+    // rule puts the nearest neighbour's class (tallies[0], first = 0) first whatever its votes.
+    const auto majority_order = [](const Tally& a, const Tally& b) {
         if (a.vote.votes != b.vote.votes) return a.vote.votes > b.vote.votes;
         if (a.vote.distance_sum != b.vote.distance_sum)
             return a.vote.distance_sum < b.vote.distance_sum;
         return a.first < b.first;
-    });
+    };
+    if (rule == VoteRule::kNearest)
+        std::sort(tallies.begin() + 1, tallies.end(), majority_order);
+    else
+        std::sort(tallies.begin(), tallies.end(), majority_order);
     const NeighbourView& best = result.neighbours[tallies.front().first];
     result.class_name = best.class_name;
     result.class_id = best.class_id;
@@ -87,7 +102,7 @@ Classifier::Classifier(KnnIndex index, std::vector<ViewLabel> labels,
 
 Classification Classifier::classify(std::span<const float> descriptor) const {
     const KnnResult found = index_.search(descriptor, options_.k);
-    return classify_neighbours(found.neighbours, labels_);
+    return classify_neighbours(found.neighbours, labels_, options_.vote);
 }
 
 std::vector<Classification> Classifier::classify_batch(std::span<const float> descriptors,
@@ -95,7 +110,8 @@ std::vector<Classification> Classifier::classify_batch(std::span<const float> de
     const std::vector<KnnResult> found = index_.search_batch(descriptors, options_.k, threads);
     std::vector<Classification> results;
     results.reserve(found.size());
-    for (const KnnResult& f : found) results.push_back(classify_neighbours(f.neighbours, labels_));
+    for (const KnnResult& f : found)
+        results.push_back(classify_neighbours(f.neighbours, labels_, options_.vote));
     return results;
 }
 

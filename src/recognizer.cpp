@@ -369,6 +369,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     impl_->info.categories = matrix.categories;
     ClassifierOptions classifier_options;
     classifier_options.k = options.k;
+    classifier_options.vote = options.vote;
     impl_->classifier =
         std::make_unique<Classifier>(std::move(index), std::move(labels), classifier_options);
 }
@@ -413,7 +414,7 @@ Classification Recognizer::classify_descriptor(std::span<const float> signatures
         results.push_back(classifier.index().search(signatures.subspan(s, dim), impl_->options.k));
     const std::vector<KnnNeighbour> neighbours =
         merge_neighbours(results, impl_->options.k, classifier.index());
-    return classify_neighbours(neighbours, classifier.labels());
+    return classify_neighbours(neighbours, classifier.labels(), classifier.options().vote);
 }
 
 std::vector<CloudClassification> Recognizer::classify_batch(

@@ -30,10 +30,13 @@ ViewLabel label(const std::string& cls, int class_id, const std::string& model, 
     return l;
 }
 
-/// 1-D views at the given positions (exact binary fractions, so distances are exact).
-Classifier make(const std::vector<float>& positions, std::vector<ViewLabel> labels, std::size_t k) {
+/// 1-D views at the given positions (exact binary fractions, so distances are exact); the
+/// majority rule unless told otherwise.
+Classifier make(const std::vector<float>& positions, std::vector<ViewLabel> labels, std::size_t k,
+                esf::VoteRule vote = esf::VoteRule::kMajority) {
     ClassifierOptions options;
     options.k = k;
+    options.vote = vote;
     return Classifier(KnnIndex(positions, 1), std::move(labels), options);
 }
 
@@ -71,6 +74,52 @@ TEST(Classifier, MajorityWinsOverTheNearestView) {
     EXPECT_EQ(r.votes[1].class_name, "mug");
     EXPECT_EQ(r.votes[1].votes, 2u);
     EXPECT_EQ(r.votes[1].distance_sum, 0.125 + 0.5);
+}
+
+TEST(Classifier, NearestRuleNamesTheNearestViewsClassAgainstAMajority) {
+    // The views of MajorityWinsOverTheNearestView: the nearest (0.125) is a mug, bowl has 3 of 5
+    // votes -> mug, confidence 2/5, best view 0; the votes list the mug first, then the bowl.
+    const Classifier c = make(
+        {0.125f, 0.25f, 0.375f, 0.5f, 0.625f, 4.0f},
+        {label("mug", 0, "mug_a", 0), label("bowl", 1, "bowl_a", 1), label("bowl", 1, "bowl_b", 2),
+         label("mug", 0, "mug_a", 3), label("bowl", 1, "bowl_a", 4), label("mug", 0, "mug_b", 5)},
+        5, esf::VoteRule::kNearest);
+    const Classification r = c.classify(std::vector<float>{0.0f});
+    EXPECT_EQ(r.class_name, "mug");
+    EXPECT_EQ(r.class_id, 0);
+    EXPECT_DOUBLE_EQ(r.confidence, 0.4);
+    EXPECT_EQ(r.best_model, "mug_a");
+    EXPECT_EQ(r.best_view, 0);
+    EXPECT_EQ(r.best_distance, 0.125);
+    ASSERT_EQ(r.votes.size(), 2u);
+    EXPECT_EQ(r.votes[0].class_name, "mug");
+    EXPECT_EQ(r.votes[0].votes, 2u);
+    EXPECT_EQ(r.votes[1].class_name, "bowl");
+    EXPECT_EQ(r.votes[1].votes, 3u);
+    EXPECT_EQ(ClassifierOptions{}.vote, esf::VoteRule::kNearest);
+}
+
+TEST(Classifier, NearestRuleOrdersTheOtherClassesByVotes) {
+    // query 0; k = 6: cup nearest (1 vote), then bowl x2, mug x3 -> cup; then mug (3), bowl (2).
+    const Classifier c =
+        make({0.125f, 0.25f, 0.375f, 0.5f, 0.625f, 0.75f},
+             {label("cup", 2, "c", 0), label("bowl", 1, "b", 1), label("mug", 0, "m", 2),
+              label("bowl", 1, "b", 3), label("mug", 0, "m", 4), label("mug", 0, "m", 5)},
+             6, esf::VoteRule::kNearest);
+    const Classification r = c.classify(std::vector<float>{0.0f});
+    EXPECT_EQ(r.class_name, "cup");
+    EXPECT_DOUBLE_EQ(r.confidence, 1.0 / 6.0);
+    ASSERT_EQ(r.votes.size(), 3u);
+    EXPECT_EQ(r.votes[1].class_name, "mug");
+    EXPECT_EQ(r.votes[2].class_name, "bowl");
+}
+
+TEST(Classifier, VoteRuleNames) {
+    EXPECT_STREQ(esf::to_string(esf::VoteRule::kNearest), "nearest");
+    EXPECT_EQ(esf::parse_vote_rule("majority"), esf::VoteRule::kMajority);
+    EXPECT_EQ(esf::parse_vote_rule(esf::to_string(esf::VoteRule::kNearest)),
+              esf::VoteRule::kNearest);
+    EXPECT_THROW(esf::parse_vote_rule("Majority"), std::invalid_argument);
 }
 
 TEST(Classifier, OneNearestNeighbourIsTheNearestViewsClass) {
@@ -145,6 +194,7 @@ TEST(Classifier, GroupedViewsVoteOnce) {
     const std::vector<std::uint32_t> views = {0, 0, 1, 2};
     ClassifierOptions options;
     options.k = 3;
+    options.vote = esf::VoteRule::kMajority;
     const Classifier c(
         KnnIndex(rows, 1, views),
         {label("mug", 0, "m", 0), label("bowl", 1, "b", 1), label("bowl", 1, "b", 2)}, options);

@@ -17,6 +17,7 @@ struct RecognizerArgs {
     RecognizerOptions options;
     bool no_weights = false;
     bool every_view = false;
+    std::string vote = "nearest";
 };
 
 /// DB positional, -k, --descriptor, --no-weights, --threads. `args` must outlive `cmd`.
@@ -25,7 +26,7 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
         ->required()
         ->check(CLI::ExistingFile);
     cmd.add_option("-k", args.options.k,
-                   "Nearest models that vote, each by its nearest view (1: the nearest view)")
+                   "Nearest models (each by its nearest view) that vote and give the confidence")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     cmd.add_option("--descriptor", args.options.descriptor,
@@ -35,6 +36,11 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
     cmd.add_flag("--every-view", args.every_view,
                  "The k nearest views vote, several of one model among them (default: one view "
                  "per model)");
+    cmd.add_option("--vote", args.vote,
+                   "How the neighbours name the class: nearest (the nearest one's class; the "
+                   "others give the confidence) or majority")
+        ->check(CLI::IsMember({"nearest", "majority"}))
+        ->capture_default_str();
     cmd.add_option("--samplings", args.options.query_samplings,
                    "ESF: describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))
@@ -49,6 +55,7 @@ inline RecognizerOptions recognizer_options(const RecognizerArgs& args) {
     RecognizerOptions options = args.options;
     options.use_weights = !args.no_weights;
     options.one_view_per_model = !args.every_view;
+    options.vote = parse_vote_rule(args.vote);
     return options;
 }
 

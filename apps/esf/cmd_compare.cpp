@@ -273,7 +273,8 @@ void add_compare_command(CLI::App& app) {
                     "View sphere subdivisions: 0 = 20, 1 = 80, 2 = 320 views")
         ->check(CLI::Range(0, 4))
         ->capture_default_str();
-    cmd->add_option("-k", args->k, "Nearest models per query, each by its nearest view (the k of k-NN)")
+    cmd->add_option("-k", args->k,
+                    "Nearest models per query, each by its nearest view (the k of k-NN)")
         ->check(CLI::Range(std::size_t{1}, std::size_t{1000}))
         ->capture_default_str();
     cmd->add_option("--groups", args->groups,

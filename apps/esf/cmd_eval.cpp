@@ -32,6 +32,7 @@ struct EvalArgs {
     std::string descriptor;
     bool no_weights = false;
     bool every_view = false;
+    std::string vote = "nearest";
     int samplings = 1;
     std::string queries;
     int threads = 0;
@@ -57,6 +58,7 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.descriptor = args.descriptor;
     options.use_weights = !args.no_weights;
     options.one_view_per_model = !args.every_view;
+    options.vote = parse_vote_rule(args.vote);
     options.query_samplings = args.samplings;
     options.threads = args.threads;
     return options;
@@ -313,6 +315,10 @@ void add_eval_command(CLI::App& app) {
     cmd->add_flag("--every-view", args->every_view,
                   "Rank the k nearest views, several of one model among them (the paper's "
                   "ranks; default: one view per model)");
+    cmd->add_option("--vote", args->vote,
+                    "Scenes: how the neighbours name an object's class, nearest or majority")
+        ->check(CLI::IsMember({"nearest", "majority"}))
+        ->capture_default_str();
     cmd->add_option("--samplings", args->samplings,
                     "ESF: describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))

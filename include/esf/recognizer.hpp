@@ -4,8 +4,8 @@
 //
 //   database (opened read-only once) -> k-NN index over its descriptors (+ learned weights)
 //   scene -> segment_scene() -> clusters -> descriptors (in parallel, the database's settings)
-//         -> k nearest models, each by its nearest view (L1) -> votes -> class, confidence,
-//            best model, view and pose
+//         -> k nearest models, each by its nearest view (L1) -> the nearest one's class (the
+//            others give the confidence), best model, view and pose
 //
 // A Recognizer describes queries with exactly the descriptor and settings the database was
 // trained with (query_setup() reads them from the database), so query and training descriptors
@@ -44,6 +44,8 @@ struct RecognizerOptions {
     /// distance), so that one model's many similar views do not fill the list and the vote;
     /// false: the k nearest views (the paper's ranks).
     bool one_view_per_model = true;
+    /// How the neighbours name the class (classifier.hpp): the nearest one's class by default.
+    VoteRule vote = VoteRule::kNearest;
     /// Descriptor kind to use when the database holds several; empty: the only one stored.
     std::string descriptor;
     /// Weigh the L1 distance with the database's learned block weights when it has them
