@@ -366,17 +366,21 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
             if (bound[r] <= limit) out.emplace_back(bound[r], static_cast<std::uint32_t>(r));
     };
 
-    // Any `want` rows bound the want-th smallest bound from above, so the want-th smallest bound
-    // of a sample of rows cuts the candidates for the first exact distances to a few.
-    const std::size_t sample = std::min(rows_, std::max(kSampleRows, want));
+    // Any `seeds` rows bound the seeds-th smallest bound from above, so the seeds-th smallest
+    // bound of a sample of rows cuts the candidates for the first exact distances to a few. With
+    // families the seeds are as many rows as `want` families hold on average, so that they
+    // usually hold `want` families.
+    const std::size_t seeds =
+        has_families() ? std::min(rows_, want * ((rows_ + families_ - 1) / families_)) : want;
+    const std::size_t sample = std::min(rows_, std::max(kSampleRows, seeds));
     std::vector<double> sampled(sample);
     for (std::size_t i = 0; i < sample; ++i) sampled[i] = bound[i * rows_ / sample];
-    std::nth_element(sampled.begin(), sampled.begin() + static_cast<std::ptrdiff_t>(want - 1),
+    std::nth_element(sampled.begin(), sampled.begin() + static_cast<std::ptrdiff_t>(seeds - 1),
                      sampled.end());
-    const double cut = sampled[want - 1];
+    const double cut = sampled[seeds - 1];
     std::vector<Candidate> below_cut;
     rows_below(cut, below_cut);
-    const auto seeds_end = below_cut.begin() + static_cast<std::ptrdiff_t>(want);
+    const auto seeds_end = below_cut.begin() + static_cast<std::ptrdiff_t>(seeds);
     std::nth_element(below_cut.begin(), seeds_end - 1, below_cut.end());
     std::vector<Candidate> candidates(below_cut.begin(), seeds_end);
     refine(candidates);

@@ -358,12 +358,18 @@ TEST(KnnIndex, FamiliesMatchBruteForce) {
     std::shuffle(row_views.begin(), row_views.end(), rng);
     for (std::size_t v = 0; v < 1000; ++v)
         grouped_families[v] = static_cast<std::uint32_t>(v < 40 ? 0 : 1 + (v - 40) % 80);
+    // Skewed, without groups: family 0 holds 2900 views, each of the other 100 one view (the
+    // first rows by bound are then mostly family 0's, and the search must look further).
+    std::vector<std::uint32_t> skewed(n);
+    for (std::size_t v = 0; v < n; ++v)
+        skewed[v] = v % 30 == 0 ? static_cast<std::uint32_t>(1 + v / 30) : 0;
     const std::vector<float> queries = make_queries(rows, dim, 47);
     for (KnnKernel kernel : supported_kernels()) {
-        for (const bool grouped : {false, true}) {
+        for (const int layout : {0, 1, 2}) {
+            const bool grouped = layout == 1;
             KnnIndexOptions options;
             options.kernel = kernel;
-            options.view_families = grouped ? grouped_families : consecutive;
+            options.view_families = layout == 0 ? consecutive : grouped ? grouped_families : skewed;
             const KnnIndex index =
                 grouped ? KnnIndex(rows, dim, row_views, options) : KnnIndex(rows, dim, options);
             const std::vector<std::uint32_t> no_groups;
@@ -373,8 +379,10 @@ TEST(KnnIndex, FamiliesMatchBruteForce) {
                     expect_same(index.search(query, k).neighbours,
                                 brute_force_families(rows, dim, grouped ? row_views : no_groups,
                                                      options.view_families, query, k),
-                                std::string(grouped ? "grouped" : "rows") + " k " +
-                                    std::to_string(k) + " query " + std::to_string(q));
+                                std::string(layout == 0 ? "rows"
+                                            : grouped   ? "grouped"
+                                                        : "skewed") +
+                                    " k " + std::to_string(k) + " query " + std::to_string(q));
                 }
             }
         }
