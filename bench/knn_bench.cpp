@@ -4,6 +4,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <utility>
@@ -121,8 +122,9 @@ void BM_ExactDistance(benchmark::State& state) {
     const std::vector<float> weights(kDim, 1.0f);
     std::size_t i = 0;
     for (auto _ : state) {
-        benchmark::DoNotOptimize(
-            exact(queries().data(), rows.data() + (i % 64) * kDim, weights.data(), kDim));
+        benchmark::DoNotOptimize(exact(queries().data(), rows.data() + (i % 64) * kDim,
+                                       weights.data(), kDim,
+                                       std::numeric_limits<double>::infinity()));
         ++i;
     }
     state.SetItemsProcessed(static_cast<std::int64_t>(i));

@@ -353,7 +353,7 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
             const std::uint32_t view = view_of(row);
             top.offer(family_of(view), view, row,
                       kernels.exact(query.data(), data_.data() + row * dimension_, weights_.data(),
-                                    dimension_));
+                                    dimension_, top.threshold()));
             ++result.exact_distances;
         }
     };
@@ -453,7 +453,7 @@ double KnnIndex::distance(std::span<const float> query, std::size_t row) const {
         throw std::invalid_argument("knn index: row " + std::to_string(row) + " out of range (" +
                                     std::to_string(rows_) + " rows)");
     return detail::knn_kernels(kernel_).exact(query.data(), data_.data() + row * dimension_,
-                                              weights_.data(), dimension_);
+                                              weights_.data(), dimension_, kInf);
 }
 
 std::size_t KnnIndex::memory_bytes() const {

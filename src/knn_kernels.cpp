@@ -27,9 +27,14 @@ inline void exact_tail(const float* a, const float* b, const float* w, std::size
                        std::fabs(static_cast<double>(a[i]) - static_cast<double>(b[i]));
 }
 
-double exact_scalar(const float* a, const float* b, const float* w, std::size_t n) {
+double exact_scalar(const float* a, const float* b, const float* w, std::size_t n, double limit) {
     double lane[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    exact_tail(a, b, w, 0, n, lane);
+    std::size_t i = 0;
+    for (; i + detail::kExactCheck < n; i += detail::kExactCheck) {
+        exact_tail(a, b, w, i, i + detail::kExactCheck, lane);
+        if (const double partial = combine_lanes(lane); partial > limit) return partial;
+    }
+    exact_tail(a, b, w, i, n, lane);
     return combine_lanes(lane);
 }
 
@@ -59,12 +64,18 @@ void sketch_scalar(const std::uint8_t* rows, std::size_t count, std::size_t stri
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 
 __attribute__((target("avx2"))) double exact_avx2(const float* a, const float* b, const float* w,
-                                                  std::size_t n) {
+                                                  std::size_t n, double limit) {
     const __m256d sign = _mm256_set1_pd(-0.0);
     __m256d lo = _mm256_setzero_pd();  // lanes 0..3
     __m256d hi = _mm256_setzero_pd();  // lanes 4..7
+    alignas(32) double lane[8];
     std::size_t i = 0;
     for (; i + 8 <= n; i += 8) {
+        if (i != 0 && i % detail::kExactCheck == 0) {
+            _mm256_store_pd(lane, lo);
+            _mm256_store_pd(lane + 4, hi);
+            if (const double partial = combine_lanes(lane); partial > limit) return partial;
+        }
         const __m256d a_lo = _mm256_cvtps_pd(_mm_loadu_ps(a + i));
         const __m256d a_hi = _mm256_cvtps_pd(_mm_loadu_ps(a + i + 4));
         const __m256d b_lo = _mm256_cvtps_pd(_mm_loadu_ps(b + i));
@@ -76,7 +87,6 @@ __attribute__((target("avx2"))) double exact_avx2(const float* a, const float* b
         lo = _mm256_add_pd(lo, _mm256_mul_pd(w_lo, d_lo));
         hi = _mm256_add_pd(hi, _mm256_mul_pd(w_hi, d_hi));
     }
-    alignas(32) double lane[8];
     _mm256_store_pd(lane, lo);
     _mm256_store_pd(lane + 4, hi);
     exact_tail(a, b, w, i, n, lane);
@@ -179,16 +189,21 @@ __attribute__((target("avx2"))) void sketch_avx2(const std::uint8_t* rows, std::
 }
 
 __attribute__((target("avx512f,avx512bw"))) double exact_avx512(const float* a, const float* b,
-                                                                const float* w, std::size_t n) {
+                                                                const float* w, std::size_t n,
+                                                                double limit) {
     __m512d acc = _mm512_setzero_pd();  // lanes 0..7
+    alignas(64) double lane[8];
     std::size_t i = 0;
     for (; i + 8 <= n; i += 8) {
+        if (i != 0 && i % detail::kExactCheck == 0) {
+            _mm512_store_pd(lane, acc);
+            if (const double partial = combine_lanes(lane); partial > limit) return partial;
+        }
         const __m512d av = _mm512_cvtps_pd(_mm256_loadu_ps(a + i));
         const __m512d bv = _mm512_cvtps_pd(_mm256_loadu_ps(b + i));
         const __m512d wv = _mm512_cvtps_pd(_mm256_loadu_ps(w + i));
         acc = _mm512_add_pd(acc, _mm512_mul_pd(wv, _mm512_abs_pd(_mm512_sub_pd(av, bv))));
     }
-    alignas(64) double lane[8];
     _mm512_store_pd(lane, acc);
     exact_tail(a, b, w, i, n, lane);
     return combine_lanes(lane);

@@ -12,7 +12,17 @@ namespace esf::detail {
 /// Canonical weighted L1: lane i % 8 accumulates w_i * |a_i - b_i| (differences and products
 /// in double) in increasing i; the lanes are combined as ((l0+l4)+(l2+l6))+((l1+l5)+(l3+l7)).
 /// Every kernel returns bit-identical values.
-using ExactL1Fn = double (*)(const float* a, const float* b, const float* w, std::size_t n);
+///
+/// `limit`: after every kExactCheck elements the lanes accumulated so far are combined the same
+/// way; when that partial sum exceeds `limit` the kernel stops and returns it. The terms are
+/// never negative and rounding to nearest is monotone, so the full distance is then larger than
+/// `limit` too; a returned value <= limit is the full distance, bit for bit. +infinity never
+/// stops.
+using ExactL1Fn = double (*)(const float* a, const float* b, const float* w, std::size_t n,
+                             double limit);
+
+/// Elements between two partial-sum checks of an exact kernel (a multiple of 8).
+inline constexpr std::size_t kExactCheck = 128;
 
 /// Lower bounds for `count` rows of `stride` bytes (a multiple of 16) starting at `rows`, with
 /// `weight` padded with zeros to a multiple of 8 lanes (of 8 bytes):

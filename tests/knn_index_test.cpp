@@ -458,16 +458,25 @@ TEST(KnnKernels, ExactDistanceIsBitIdenticalToScalar) {
     const auto scalar = esf::detail::knn_kernels(KnnKernel::kScalar);
     for (KnnKernel kernel : supported_kernels()) {
         const auto k = esf::detail::knn_kernels(kernel);
-        for (std::size_t n : {1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 308, 352, 640}) {
+        for (std::size_t n :
+             {1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 128, 129, 308, 352, 640, 724}) {
             std::vector<float> a(n), b(n), w(n);
             for (std::size_t i = 0; i < n; ++i) {
                 a[i] = value(rng);
                 b[i] = value(rng);
                 w[i] = std::fabs(value(rng));
             }
-            const double want = scalar.exact(a.data(), b.data(), w.data(), n);
-            EXPECT_EQ(k.exact(a.data(), b.data(), w.data(), n), want)
+            const double inf = std::numeric_limits<double>::infinity();
+            const double want = scalar.exact(a.data(), b.data(), w.data(), n, inf);
+            EXPECT_EQ(k.exact(a.data(), b.data(), w.data(), n, inf), want)
                 << esf::to_string(kernel) << " n " << n;
+            // A limit at or above the distance changes nothing; below it, the kernel may stop
+            // early, and whatever it returns then lies above the limit.
+            EXPECT_EQ(k.exact(a.data(), b.data(), w.data(), n, want), want)
+                << esf::to_string(kernel) << " n " << n;
+            for (const double limit : {0.0, want / 4, want / 2, std::nextafter(want, 0.0)})
+                EXPECT_GT(k.exact(a.data(), b.data(), w.data(), n, limit), limit)
+                    << esf::to_string(kernel) << " n " << n << " limit " << limit;
             double naive = 0.0;
             for (std::size_t i = 0; i < n; ++i)
                 naive += static_cast<double>(w[i]) *
