@@ -176,7 +176,7 @@ DescriptorInfo registered_info(const std::string& name) {
             make_info("esf-angles", kEsfAnglesSize, false, true,
                       "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms "
                       "(VFH's angles, Rusu et al. 2010), seeded",
-                      kEsfVersion * 100 + kSurfaceAnglesVersion, 2),
+                      kEsfVersion * 100 + kSurfaceAnglesVersion, 1),
             kAngleBlockSizes, kAngleBlockNames);
     return baseline_info(name);
 }

@@ -172,7 +172,7 @@ TEST(DescriptorRegistry, NamesAndInfo) {
     EXPECT_EQ(esf::stored_descriptor_version("esf-angles"),
               esf::kEsfVersion * 100 + esf::kSurfaceAnglesVersion);
     EXPECT_EQ(esf::stored_descriptor_version("shot"), esf::kBaselineDescriptorVersion);
-    EXPECT_EQ(esf::descriptor_sketch_group("esf-angles"), 2);
+    EXPECT_EQ(esf::descriptor_sketch_group("esf-angles"), 1);
     EXPECT_EQ(esf::descriptor_sketch_group("esf"), 0);
 }
 

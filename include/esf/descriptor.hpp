@@ -82,9 +82,11 @@ struct DescriptorInfo {
     /// kBaselineDescriptorVersion for the PCL baselines.
     int version = 0;
     /// The sketch group (KnnIndexOptions::sketch_group) that searches its signatures fastest:
-    /// 2 for esf-angles, whose distances lie closer together than ESF's (with the default, sums
-    /// of 12 bins, a search computes exact distances for about a fifth of the views; with 2, a
-    /// sketch of 368 bytes, for few), 0 (the default) for the others.
+    /// 1 for esf-angles, whose distances lie closer together than ESF's (with the default, sums
+    /// of 12 bins, a search computes exact distances for about a fifth of the views; with 1, an
+    /// 8-bit copy of every bin, 768 bytes a view, for few: the real objects of a six-object scene
+    /// match in 2.0 ms against 2.8 ms with sums of 2 bins, BENCHMARKS.md), 0 (the default) for
+    /// the others.
     int sketch_group = 0;
 };
 
