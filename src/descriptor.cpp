@@ -216,7 +216,7 @@ class D2Global final : public GlobalDescriptor {
     std::vector<Signature> compute(std::span<const Eigen::Vector3f> points) const override {
         const EsfResult result = pool_.compute(points, info_.name);
         // Blocks 6, 7, 8 of ESF are D2-IN, D2-OUT, D2-MIXED, weighted 0.5, 2, 2 before ESF's
-        // normalisation (esf-spec.md, "Histograms and output"); dividing by the weights gives
+        // normalisation (docs/esf.md, "Histograms and output"); dividing by the weights gives
         // counts up to one common factor, which the normalisation below removes.
         constexpr int kFirstD2Block = 6;
         constexpr std::array<float, 3> kD2Weights = {0.5f, 2.0f, 2.0f};

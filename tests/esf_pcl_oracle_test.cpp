@@ -1,7 +1,8 @@
 // ESF against its reference, pcl::ESFEstimation of Debian's PCL 1.13, on real clouds.
 //
 // PCL seeds rand() from time(NULL) on every call. This executable defines time() itself, so
-// the reference uses the seed the test chooses (esf-spec.md, "How to pin PCL's seed").
+// the reference uses the seed the test chooses (the symbol is looked up through the dynamic
+// linker, so this definition wins; docs/esf.md, "Sampling").
 
 #include <gtest/gtest.h>
 #include <pcl/features/esf.h>
@@ -85,7 +86,8 @@ TEST(EsfPclOracle, PclSamplerIsBitExact) {
     }
 }
 
-// esf-spec.md: PCL's test/milk.pcd with seed 12345 gives these block sums.
+// PCL's own test cloud (test/milk.pcd of the PCL repository) with seed 12345: the block sums
+// Debian's PCL 1.13 gives, measured once and kept here as the reference.
 TEST(EsfPclOracle, MilkReferenceBlockSums) {
     ESF_REQUIRE_DATA("real/pcl/milk_test.pcd");
     const esf::Points points = load_finite("real/pcl/milk_test.pcd");

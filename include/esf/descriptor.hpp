@@ -58,8 +58,9 @@ namespace esf {
 inline constexpr int kBaselineDescriptorVersion = 1;
 /// Version of what "esf-angles" adds to ESF (the surface angle histograms and how the blocks are
 /// scaled); that descriptor's stored version is kEsfVersion * 100 + this, so that a change of
-/// either part is refused. 1: ESF's blocks as ESF scales them; 2: every ESF block an equal share.
-inline constexpr int kSurfaceAnglesVersion = 2;
+/// either part is refused. 1: ESF's blocks as ESF scales them; 2: every ESF block an equal share;
+/// 3: surface angle cells of 7 mm instead of 1 cm.
+inline constexpr int kSurfaceAnglesVersion = 3;
 
 /// "esf-angles": ESF's ten 64-bin blocks, each scaled to an equal share, then the six surface
 /// angle histograms, weighted kEsfAnglesWeight in all against ESF's 1; the signature sums to 1.
