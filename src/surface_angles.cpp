@@ -14,16 +14,33 @@
 namespace esf {
 namespace {
 
-/// Point count, sum and second moments (about the grid origin) of the points of one cell.
+/// Point count, sum and the six distinct second moments (about the grid origin) of the points of
+/// one cell: ten doubles, added lane by lane.
 struct Moments {
-    double count = 0.0;
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    // count, x, y, z, xx, xy, xz, yy, yz, zz
+    std::array<double, 10> m{};
 
+    void add_point(const Eigen::Vector3d& q) {
+        m[0] += 1.0;
+        m[1] += q.x();
+        m[2] += q.y();
+        m[3] += q.z();
+        m[4] += q.x() * q.x();
+        m[5] += q.x() * q.y();
+        m[6] += q.x() * q.z();
+        m[7] += q.y() * q.y();
+        m[8] += q.y() * q.z();
+        m[9] += q.z() * q.z();
+    }
     void add(const Moments& other) {
-        count += other.count;
-        sum += other.sum;
-        outer += other.outer;
+        for (std::size_t i = 0; i < m.size(); ++i) m[i] += other.m[i];
+    }
+    double count() const { return m[0]; }
+    Eigen::Vector3d sum() const { return {m[1], m[2], m[3]}; }
+    Eigen::Matrix3d outer() const {
+        Eigen::Matrix3d o;
+        o << m[4], m[5], m[6], m[5], m[7], m[8], m[6], m[8], m[9];
+        return o;
     }
 };
 
@@ -83,10 +100,7 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
             cells.emplace_back();
             coords.push_back(c);
         }
-        Moments& m = cells[static_cast<std::size_t>(slot)];
-        m.count += 1.0;
-        m.sum += q;
-        m.outer += q * q.transpose();
+        cells[static_cast<std::size_t>(slot)].add_point(q);
     }
 
     // Normals and surface variation per cell, from its 3 x 3 x 3 neighbourhood.
@@ -114,9 +128,9 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
                 }
             }
         }
-        if (m.count < 3.0) continue;
-        const Eigen::Vector3d mean = m.sum / m.count;
-        const Eigen::Matrix3d covariance = m.outer / m.count - mean * mean.transpose();
+        if (m.count() < 3.0) continue;
+        const Eigen::Vector3d mean = m.sum() / m.count();
+        const Eigen::Matrix3d covariance = m.outer() / m.count() - mean * mean.transpose();
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
         solver.computeDirect(covariance);
         const Eigen::Vector3d values = solver.eigenvalues().cwiseMax(0.0);  // ascending
@@ -124,7 +138,7 @@ SurfaceAngleHistograms compute_surface_angles(std::span<const Eigen::Vector3f> p
         // A point or a line (computeDirect is accurate to about 1e-9 of the largest value).
         if (!(total > 0.0) || values[1] <= 1e-6 * values[2]) continue;
         Surfel s;
-        s.position = cells[i].sum / cells[i].count + lo;
+        s.position = cells[i].sum() / cells[i].count() + lo;
         s.normal = solver.eigenvectors().col(0).normalized();
         if (s.normal.dot(-s.position) < 0.0) s.normal = -s.normal;
         s.variation = values[0] / total;
