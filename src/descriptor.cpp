@@ -110,7 +110,10 @@ class EstimatorPool {
         try {
             return pool_.compute(points);
         } catch (const std::invalid_argument& e) {
-            throw std::invalid_argument(name + ": " + e.what());
+            // "ESF needs ..." -> "<name>: needs ...", the form of the other descriptors' errors.
+            std::string what = e.what();
+            if (what.rfind("ESF ", 0) == 0) what.erase(0, 4);
+            throw std::invalid_argument(name + ": " + what);
         }
     }
 
@@ -157,11 +160,14 @@ DescriptorInfo baseline_info(const std::string& name) {
 
 /// What each registered descriptor computes (the name is checked by the caller).
 DescriptorInfo registered_info(const std::string& name) {
-    if (name == "esf")
-        return with_esf_blocks(make_info(
+    if (name == "esf") {
+        DescriptorInfo info = with_esf_blocks(make_info(
             "esf", kEsfSize, false, true,
             "Ensemble of Shape Functions (Wohlkinger & Vincze 2011), fast sampler, seeded",
             kEsfVersion));
+        info.esf_options = true;
+        return info;
+    }
     if (name == "sdvs")
         return with_blocks(make_info("sdvs", 3 * kEsfBins, false, true,
                                      "SDVS: D2 split by voxel-line class IN, OUT, "
@@ -171,21 +177,24 @@ DescriptorInfo registered_info(const std::string& name) {
     if (name == "d2")
         return make_info("d2", kEsfBins, false, true, "D2 shape distribution (Osada et al. 2002)",
                          kEsfVersion);
-    if (name == "esf-angles")
-        return with_esf_blocks(
+    if (name == "esf-angles") {
+        DescriptorInfo info = with_esf_blocks(
             make_info("esf-angles", kEsfAnglesSize, false, true,
                       "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms "
                       "(VFH's angles, Rusu et al. 2010), seeded",
                       kEsfVersion * 100 + kSurfaceAnglesVersion, 1),
             kAngleBlockSizes, kAngleBlockNames);
+        info.angles_weight = true;
+        return info;
+    }
     return baseline_info(name);
 }
 
 /// Our ESF (esf_descriptor.hpp), fast sampler.
 class EsfGlobal final : public GlobalDescriptor {
   public:
-    explicit EsfGlobal(const DescriptorOptions& options)
-        : info_(registered_info("esf")), pool_(fast_esf_options(options)) {}
+    explicit EsfGlobal(const DescriptorOptions& options) : EsfGlobal(fast_esf_options(options)) {}
+    explicit EsfGlobal(const EsfOptions& options) : info_(registered_info("esf")), pool_(options) {}
     const DescriptorInfo& info() const override { return info_; }
 
     std::vector<Signature> compute(std::span<const Eigen::Vector3f> points) const override {
@@ -336,6 +345,10 @@ std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
         detail::baseline_module(name).make(baseline_info(name), options);
     if (!baseline) throw std::invalid_argument(name + ": the baselines module does not know it");
     return baseline;
+}
+
+std::unique_ptr<GlobalDescriptor> make_esf_descriptor(const EsfOptions& options) {
+    return std::make_unique<EsfGlobal>(options);  // its pool checks the options
 }
 
 void check_descriptor_options(const std::string& name, const DescriptorOptions& options) {

@@ -9,6 +9,7 @@
 #include <utility>
 #include <variant>
 
+#include "esf/descriptor_settings.hpp"
 #include "esf/error.hpp"
 #include "esf/knn_index.hpp"
 #include "esf/parallel.hpp"
@@ -18,67 +19,6 @@
 namespace esf {
 
 namespace {
-
-// ---- settings -------------------------------------------------------------------------------
-
-const SettingValue* find_setting(const Settings& settings, const std::string& key) {
-    const auto it = settings.find(key);
-    return it == settings.end() ? nullptr : &it->second;
-}
-
-std::int64_t integer_setting(const Settings& settings, const std::string& key,
-                             std::int64_t fallback) {
-    const SettingValue* value = find_setting(settings, key);
-    if (!value) return fallback;
-    if (const auto* i = std::get_if<std::int64_t>(value)) return *i;
-    throw std::invalid_argument("setting " + key + " = " + to_string(*value) +
-                                " is not an integer");
-}
-
-int int_setting(const Settings& settings, const std::string& key, int fallback) {
-    const std::int64_t v = integer_setting(settings, key, fallback);
-    if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
-        throw std::invalid_argument("setting " + key + " = " + std::to_string(v) +
-                                    " is out of range");
-    return static_cast<int>(v);
-}
-
-double real_setting(const Settings& settings, const std::string& key, double fallback) {
-    const SettingValue* value = find_setting(settings, key);
-    if (!value) return fallback;
-    if (const auto* d = std::get_if<double>(value)) return *d;
-    if (const auto* i = std::get_if<std::int64_t>(value)) return static_cast<double>(*i);
-    throw std::invalid_argument("setting " + key + " = " + to_string(*value) + " is not a number");
-}
-
-std::string text_setting(const Settings& settings, const std::string& key,
-                         const std::string& fallback) {
-    const SettingValue* value = find_setting(settings, key);
-    if (!value) return fallback;
-    if (const auto* s = std::get_if<std::string>(value)) return *s;
-    throw std::invalid_argument("setting " + key + " = " + to_string(*value) + " is not text");
-}
-
-/// The run's seed: an integer, or the decimal text training stores for seeds above 2^63 - 1.
-std::uint64_t seed_setting(const Settings& settings) {
-    const SettingValue* value = find_setting(settings, "seed");
-    if (!value) return 0;
-    if (const auto* i = std::get_if<std::int64_t>(value)) {
-        if (*i < 0) throw std::invalid_argument("setting seed = " + std::to_string(*i) + " < 0");
-        return static_cast<std::uint64_t>(*i);
-    }
-    if (const auto* s = std::get_if<std::string>(value)) {
-        std::size_t used = 0;
-        std::uint64_t seed = 0;
-        try {
-            seed = std::stoull(*s, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == s->size() && !s->empty() && s->front() != '-') return seed;
-    }
-    throw std::invalid_argument("setting seed = " + to_string(*value) + " is not a seed");
-}
 
 std::string joined(const std::vector<std::string>& names) {
     std::string out;
@@ -103,72 +43,55 @@ std::uint64_t sampling_seed(std::uint64_t seed, int sampling) {
     return detail::mix64(seed + detail::kGoldenGamma * static_cast<std::uint64_t>(sampling));
 }
 
-/// Our ESF with the database's options (estimators reused across calls, never shared); with
-/// several samplings, the mean of the descriptors of as many seeds.
-class EsfDescriber final : public Describer {
+/// The database's descriptor (descriptor_settings.hpp); with several samplings, one descriptor
+/// per sampling seed and the mean of their signatures (single-signature descriptors).
+class SeededDescriber final : public Describer {
   public:
-    EsfDescriber(const EsfOptions& options, int samplings) {
-        for (int s = 0; s < samplings; ++s) {
-            EsfOptions o = options;
-            o.seed = sampling_seed(options.seed, s);
-            pools_.push_back(std::make_unique<EsfEstimatorPool>(o));
-        }
+    SeededDescriber(const QuerySetup& setup, int samplings) {
+        const DescriptorSetup descriptor{setup.kind.name, setup.esf, setup.options};
+        const std::uint64_t seed =
+            descriptor_info(setup.kind.name).esf_options ? setup.esf.seed : setup.options.seed;
+        for (int s = 0; s < samplings; ++s)
+            descriptors_.push_back(make_descriptor(descriptor, sampling_seed(seed, s)));
+        if (samplings > 1 && descriptors_.front()->info().multi_signature)
+            throw std::invalid_argument(setup.kind.name +
+                                        ": several samplings need a single-signature descriptor");
     }
 
     std::vector<float> describe(std::span<const Eigen::Vector3f> points) const override {
-        std::array<double, kEsfSize> sum{};
-        for (const auto& pool : pools_) {
-            EsfResult result;
-            try {
-                result = pool->compute(points);
-            } catch (const std::invalid_argument& e) {
-                // "ESF needs ..." -> "esf: needs ...", the form of the other descriptors' errors.
-                std::string what = e.what();
-                if (what.rfind("ESF ", 0) == 0) what.erase(0, 4);
-                throw std::invalid_argument("esf: " + what);
-            }
-            if (pools_.size() == 1) return {result.descriptor.begin(), result.descriptor.end()};
-            for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += result.descriptor[i];
-        }
-        std::vector<float> out(sum.size());
-        const double scale = 1.0 / static_cast<double>(pools_.size());
-        for (std::size_t i = 0; i < sum.size(); ++i) out[i] = static_cast<float>(sum[i] * scale);
-        return out;
-    }
-
-  private:
-    std::vector<std::unique_ptr<EsfEstimatorPool>> pools_;
-};
-
-/// Any descriptor of the registry (descriptor.hpp).
-class RegistryDescriber final : public Describer {
-  public:
-    RegistryDescriber(const std::string& name, const DescriptorOptions& options)
-        : descriptor_(make_descriptor(name, options)) {}
-
-    std::vector<float> describe(std::span<const Eigen::Vector3f> points) const override {
-        const std::vector<Signature> signatures = descriptor_->compute(points);
-        const auto dim = static_cast<std::size_t>(descriptor_->info().dimension);
+        const DescriptorInfo& info = descriptors_.front()->info();
+        const auto dim = static_cast<std::size_t>(info.dimension);
+        std::vector<double> sum;
         std::vector<float> out;
-        out.reserve(signatures.size() * dim);
-        for (const Signature& s : signatures) {
-            if (s.size() != dim)
-                throw std::invalid_argument(descriptor_->info().name + ": a signature of " +
-                                            std::to_string(s.size()) + " floats, expected " +
-                                            std::to_string(dim));
-            out.insert(out.end(), s.begin(), s.end());
+        for (const auto& descriptor : descriptors_) {
+            const std::vector<Signature> signatures = descriptor->compute(points);
+            if (signatures.empty()) throw std::invalid_argument(info.name + ": no signature");
+            for (const Signature& sig : signatures)
+                if (sig.size() != dim)
+                    throw std::invalid_argument(info.name + ": a signature of " +
+                                                std::to_string(sig.size()) + " floats, expected " +
+                                                std::to_string(dim));
+            if (descriptors_.size() == 1) {
+                out.reserve(signatures.size() * dim);
+                for (const Signature& sig : signatures)
+                    out.insert(out.end(), sig.begin(), sig.end());
+                return out;
+            }
+            sum.resize(dim, 0.0);
+            for (std::size_t i = 0; i < dim; ++i) sum[i] += signatures.front()[i];
         }
-        if (out.empty()) throw std::invalid_argument(descriptor_->info().name + ": no signature");
+        out.resize(dim);
+        const double scale = 1.0 / static_cast<double>(descriptors_.size());
+        for (std::size_t i = 0; i < dim; ++i) out[i] = static_cast<float>(sum[i] * scale);
         return out;
     }
 
   private:
-    std::unique_ptr<GlobalDescriptor> descriptor_;
+    std::vector<std::unique_ptr<GlobalDescriptor>> descriptors_;
 };
 
 std::unique_ptr<Describer> make_describer(const QuerySetup& setup, int samplings) {
-    if (setup.kind.name == "esf") return std::make_unique<EsfDescriber>(setup.esf, samplings);
-    return std::make_unique<RegistryDescriber>(setup.kind.name, setup.options);
+    return std::make_unique<SeededDescriber>(setup, samplings);
 }
 
 /// Merges the k nearest views of each query signature into the k nearest views of the query:
@@ -195,68 +118,11 @@ int descriptor_version(const std::string& name) {
 }
 
 QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind) {
+    const DescriptorSetup read = read_descriptor_setup(settings, kind);
     QuerySetup setup;
     setup.kind = kind;
-    const int version = descriptor_version(kind.name);
-    if (kind.version != version)
-        throw std::invalid_argument("descriptor " + kind.name + " version " +
-                                    std::to_string(kind.version) +
-                                    ", but this build computes version " + std::to_string(version) +
-                                    ": retrain the database");
-    const int dimension = descriptor_info(kind.name).dimension;
-    if (kind.dimension != dimension)
-        throw std::invalid_argument(
-            "descriptor " + kind.name + " has " + std::to_string(kind.dimension) +
-            " floats, but this build computes " + std::to_string(dimension));
-    // The settings describe the kind the database was trained with; a database may also hold
-    // kinds added later, whose version and dimension are checked above.
-    if (text_setting(settings, "descriptor", kind.name) == kind.name) {
-        const std::int64_t stored_version =
-            integer_setting(settings, "descriptor_version", version);
-        if (stored_version != version)
-            throw std::invalid_argument(
-                "setting descriptor_version = " + std::to_string(stored_version) +
-                ", but this build computes " + kind.name + " version " + std::to_string(version) +
-                ": retrain the database");
-        const std::int64_t stored_dimension =
-            integer_setting(settings, "descriptor_dimension", dimension);
-        if (stored_dimension != dimension)
-            throw std::invalid_argument(
-                "setting descriptor_dimension = " + std::to_string(stored_dimension) + ", but " +
-                kind.name + " has " + std::to_string(dimension) + " floats");
-    }
-    const std::uint64_t seed = seed_setting(settings);
-    if (kind.name == "esf") {
-        EsfOptions& e = setup.esf;
-        e.samples = int_setting(settings, "esf_samples", e.samples);
-        e.grid_size = int_setting(settings, "esf_grid_size", e.grid_size);
-        e.sampler = parse_esf_sampler(text_setting(settings, "esf_sampler", to_string(e.sampler)));
-        e.max_attempts_per_sample =
-            int_setting(settings, "esf_max_attempts_per_sample", e.max_attempts_per_sample);
-        e.seed = seed;
-        try {
-            EsfEstimator check(e);
-        } catch (const std::invalid_argument& error) {
-            throw std::invalid_argument(std::string("esf settings: ") + error.what());
-        }
-    } else {
-        DescriptorOptions& o = setup.options;
-        o.seed = seed;
-        o.samples = int_setting(settings, "descriptor_samples", o.samples);
-        o.leaf_factor = static_cast<float>(
-            real_setting(settings, "descriptor_leaf_factor", static_cast<double>(o.leaf_factor)));
-        o.normal_radius_factor =
-            static_cast<float>(real_setting(settings, "descriptor_normal_radius_factor",
-                                            static_cast<double>(o.normal_radius_factor)));
-        const std::int64_t remove =
-            integer_setting(settings, "descriptor_remove_outliers", o.remove_outliers ? 1 : 0);
-        if (remove != 0 && remove != 1)
-            throw std::invalid_argument("setting descriptor_remove_outliers = " +
-                                        std::to_string(remove) + " is not 0 or 1");
-        o.remove_outliers = remove == 1;
-        o.angles_weight = real_setting(settings, "descriptor_angles_weight", o.angles_weight);
-        check_descriptor_options(kind.name, o);  // throws for options out of range
-    }
+    setup.esf = read.esf;
+    setup.options = read.options;
     return setup;
 }
 

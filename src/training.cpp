@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "csv.hpp"
+#include "esf/descriptor_settings.hpp"
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
 #include "esf/parallel.hpp"
@@ -66,18 +67,20 @@ const std::map<std::string, double>& typical_extents() {
 
 // ---- training -------------------------------------------------------------------------------
 
+/// The descriptor and its options, as the registry takes them (descriptor_settings.hpp).
+DescriptorSetup descriptor_setup(const TrainingOptions& options) {
+    return {options.descriptor, options.esf, options.descriptor_options};
+}
+
 void validate(const TrainingOptions& options) {
     if (options.min_points < 3)
         throw std::invalid_argument("min_points must be >= 3 (ESF needs a triangle), got " +
                                     std::to_string(options.min_points));
     resolve_threads(options.threads);
-    // Both throw std::invalid_argument: bad ESF options; an unknown descriptor (the message
-    // lists the valid names) or baseline options out of range.
-    if (options.descriptor == "esf") {
-        EsfEstimator check(options.esf);
-    } else {
-        make_descriptor(options.descriptor, options.descriptor_options);  // a baseline: its module
-    }
+    // Throws std::invalid_argument: an unknown descriptor (the message lists the valid names)
+    // or options out of range; then a baseline's module must load.
+    check_descriptor_setup(descriptor_setup(options));
+    require_descriptor(options.descriptor);
     // The renderer checks its options (level, camera, noise, fill, scale) when built: build one
     // for a tetrahedron so that bad options fail now, not as a failure of every model.
     Mesh tetrahedron;
@@ -211,10 +214,9 @@ void prepare_job(Job& job, const TrainingOptions& options) {
     }
 }
 
-/// Renders view `v` of a job and describes it (or records why it is skipped). `baseline` is the
-/// descriptor when it is not "esf".
+/// Renders view `v` of a job and describes it with `setup` (or records why it is skipped).
 void describe_view(Job& job, std::size_t v, const TrainingOptions& options,
-                   const GlobalDescriptor* baseline) {
+                   const DescriptorSetup& setup) {
     ViewEntry& view = job.entry.views[v];
     view.index = job.renderer->view_index(v);
     RenderedView rendered;
@@ -232,23 +234,9 @@ void describe_view(Job& job, std::size_t v, const TrainingOptions& options,
                            std::to_string(options.min_points) + ")";
         return;
     }
-    const std::uint64_t seed = view_seed(job.seed, rendered.index);
-    if (!baseline) {
-        EsfOptions esf = options.esf;
-        esf.seed = seed;
-        try {
-            const EsfResult result = EsfEstimator(esf).compute(rendered.points);
-            view.descriptors.assign(result.descriptor.begin(), result.descriptor.end());
-        } catch (const std::invalid_argument& e) {
-            view.skip_reason = e.what();
-        }
-        return;
-    }
-    // The seeded baselines (sdvs, d2) draw from the view's seed, as esf does; one object per
+    // Seeded descriptors (esf, esf-angles, sdvs, d2) draw from the view's seed; one object per
     // view (cheap next to describing it), the others ignore the seed.
-    DescriptorOptions descriptor_options = options.descriptor_options;
-    descriptor_options.seed = seed;
-    const auto descriptor = make_descriptor(baseline->info().name, descriptor_options);
+    const auto descriptor = make_descriptor(setup, view_seed(job.seed, rendered.index));
     std::vector<Signature> signatures;
     try {
         signatures = descriptor->compute(rendered.points);
@@ -415,33 +403,7 @@ std::uint64_t view_seed(std::uint64_t model_seed_value, int view_index) {
 
 Settings training_settings(const TrainingOptions& options, bool rescale_non_metric) {
     const auto& r = options.render;
-    Settings settings;
-    if (options.descriptor == "esf") {
-        const auto& e = options.esf;
-        settings = {
-            {"descriptor", std::string("esf")},
-            {"descriptor_version", std::int64_t{kEsfVersion}},
-            {"descriptor_dimension", std::int64_t{kEsfSize}},
-            {"esf_samples", std::int64_t{e.samples}},
-            {"esf_grid_size", std::int64_t{e.grid_size}},
-            {"esf_sampler", std::string(to_string(e.sampler))},
-            {"esf_max_attempts_per_sample", std::int64_t{e.max_attempts_per_sample}},
-        };
-    } else {
-        const auto& d = options.descriptor_options;
-        const DescriptorInfo info = descriptor_info(options.descriptor);
-        settings = {
-            {"descriptor", options.descriptor},
-            {"descriptor_version", std::int64_t{stored_descriptor_version(options.descriptor)}},
-            {"descriptor_dimension", std::int64_t{info.dimension}},
-            {"descriptor_samples", std::int64_t{d.samples}},
-            {"descriptor_leaf_factor", static_cast<double>(d.leaf_factor)},
-            {"descriptor_normal_radius_factor", static_cast<double>(d.normal_radius_factor)},
-            {"descriptor_remove_outliers", std::int64_t{d.remove_outliers ? 1 : 0}},
-        };
-        if (options.descriptor == "esf-angles")
-            settings.emplace("descriptor_angles_weight", d.angles_weight);
-    }
+    Settings settings = descriptor_settings(descriptor_setup(options));
     Settings common = {
         {"seed", seed_value(options.seed)},
         {"view_sphere_level", std::int64_t{r.level}},
@@ -493,15 +455,8 @@ TrainingResult train(const std::string& root, Database& database, const Training
         database.set_settings(settings);
     else
         check_settings(database, settings);
-    const std::string& descriptor_name = options.descriptor;
-    std::unique_ptr<GlobalDescriptor> baseline;
-    if (descriptor_name == "esf") {
-        database.add_descriptor_kind({descriptor_name, kEsfVersion, kEsfSize});
-    } else {
-        baseline = make_descriptor(descriptor_name, options.descriptor_options);
-        database.add_descriptor_kind({descriptor_name, stored_descriptor_version(descriptor_name),
-                                      baseline->info().dimension});
-    }
+    const DescriptorSetup setup = descriptor_setup(options);
+    database.add_descriptor_kind(descriptor_kind(setup));
 
     TrainingResult result;
     result.models_total = files.size();
@@ -545,13 +500,13 @@ TrainingResult train(const std::string& root, Database& database, const Training
         for (std::size_t i = first; i < first + count; ++i)
             for (std::size_t v = 0; v < jobs[i].entry.views.size(); ++v) views.emplace_back(i, v);
         parallel_for(views.size(), threads, [&](std::size_t k) {
-            describe_view(jobs[views[k].first], views[k].second, options, baseline.get());
+            describe_view(jobs[views[k].first], views[k].second, options, setup);
         });
 
         for (std::size_t i = first; i < first + count; ++i) {
             Job& job = jobs[i];
             job.renderer.reset();
-            database.write_model(job.entry, descriptor_name);
+            database.write_model(job.entry, setup.name);
             const std::string name = job.entry.category + "/" + job.entry.name;
             if (!job.entry.error.empty()) {
                 ++result.models_failed;

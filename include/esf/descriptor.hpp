@@ -89,6 +89,11 @@ struct DescriptorInfo {
     /// match in 2.0 ms against 2.8 ms with sums of 2 bins, BENCHMARKS.md), 0 (the default) for
     /// the others.
     int sketch_group = 0;
+    /// Configured by ESF's own options (EsfOptions: sampler, grid, attempt budget) rather than
+    /// by DescriptorOptions: "esf" (make_esf_descriptor()).
+    bool esf_options = false;
+    /// Uses DescriptorOptions::angles_weight: "esf-angles".
+    bool angles_weight = false;
 };
 
 /// descriptor_info(name).version (throws for an unknown name).
@@ -143,6 +148,11 @@ class GlobalDescriptor {
 /// when the baselines module cannot be loaded (the message says how to get it).
 std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
                                                   const DescriptorOptions& options = {});
+
+/// Descriptor "esf" with every one of ESF's options (sampler, grid, attempt budget, samples,
+/// seed), as training stores it; make_descriptor("esf", options) is the same with the fast
+/// sampler and a 64^3 grid. Throws std::invalid_argument for options out of range.
+std::unique_ptr<GlobalDescriptor> make_esf_descriptor(const EsfOptions& options);
 
 /// The registered names, in the order of the table above.
 std::vector<std::string> descriptor_names();
