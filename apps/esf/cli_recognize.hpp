@@ -42,7 +42,7 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
         ->check(CLI::IsMember({"nearest", "majority"}))
         ->capture_default_str();
     cmd.add_option("--samplings", args.options.query_samplings,
-                   "ESF: describe each query this many times (other seeds) and average")
+                   "Describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
     cmd.add_option("--threads", args.options.threads, "Worker threads, 0 = all cores")

@@ -320,7 +320,7 @@ void add_eval_command(CLI::App& app) {
         ->check(CLI::IsMember({"nearest", "majority"}))
         ->capture_default_str();
     cmd->add_option("--samplings", args->samplings,
-                    "ESF: describe each query this many times (other seeds) and average")
+                    "Describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
     cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")

@@ -51,10 +51,10 @@ struct RecognizerOptions {
     /// Weigh the L1 distance with the database's learned block weights when it has them
     /// (ESF only: ten sub-histogram weights, each applied to its 64 bins).
     bool use_weights = true;
-    /// ESF only: a query is described this many times with different sampling seeds and the
-    /// descriptors are averaged (>= 1). The seed-to-seed spread of one ESF is about 0.05-0.08
-    /// in L1; averaging brings the query nearer its expected histogram. Costs one description
-    /// (about 0.5 ms) per sampling.
+    /// Single-signature descriptors: a query is described this many times with different
+    /// sampling seeds and the signatures are averaged (>= 1; a multi-signature descriptor is
+    /// refused above 1). The seed-to-seed spread of one ESF is about 0.05-0.08 in L1; averaging
+    /// brings the query nearer its expected histogram. Costs one description per sampling.
     int query_samplings = 1;
     int threads = 0;  ///< building the index, describing and classifying batches; 0 = all cores
 };
