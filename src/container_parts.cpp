@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -17,58 +18,76 @@ struct Circle {
     double rms = std::numeric_limits<double>::infinity();
 };
 
-/// Least-squares circle through 2-D points (Kasa 1976): x^2 + y^2 + D x + E y + F = 0.
-Circle fit_circle(const std::vector<Eigen::Vector2d>& p) {
-    Circle c;
-    if (p.size() < 3) return c;
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const Eigen::Vector2d& q : p) mean += q;
-    mean /= static_cast<double>(p.size());
-    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector2d& q : p) {
-        const Eigen::Vector2d d = q - mean;
-        const Eigen::Vector3d row(d.x(), d.y(), 1.0);
-        ata += row * row.transpose();
-        atb -= row * d.squaredNorm();
+/// Sums of a 2-D point set about a fixed origin, enough for a least-squares circle: n, x, y,
+/// xx, xy, yy, xz, yz, z with z = x^2 + y^2. Two sets' sums add.
+struct CircleSums {
+    std::array<double, 9> s{};
+
+    void add(const Eigen::Vector2d& q) {
+        const double z = q.squaredNorm();
+        s[0] += 1.0;
+        s[1] += q.x();
+        s[2] += q.y();
+        s[3] += q.x() * q.x();
+        s[4] += q.x() * q.y();
+        s[5] += q.y() * q.y();
+        s[6] += q.x() * z;
+        s[7] += q.y() * z;
+        s[8] += z;
     }
+    CircleSums operator+(const CircleSums& o) const {
+        CircleSums out;
+        for (std::size_t i = 0; i < s.size(); ++i) out.s[i] = s[i] + o.s[i];
+        return out;
+    }
+};
+
+/// Least-squares circle (Kasa 1976: x^2 + y^2 + D x + E y + F = 0) from the sums of points;
+/// the residual is not computed here (rms stays infinite).
+Circle fit_circle(const CircleSums& sums) {
+    Circle c;
+    const auto& s = sums.s;
+    if (s[0] < 3.0) return c;
+    Eigen::Matrix3d ata;
+    ata << s[3], s[4], s[1], s[4], s[5], s[2], s[1], s[2], s[0];
+    const Eigen::Vector3d atb(-s[6], -s[7], -s[8]);
     const Eigen::Vector3d x = ata.ldlt().solve(atb);
     if (!x.allFinite()) return c;
-    const Eigen::Vector2d centre(-x[0] / 2, -x[1] / 2);
-    const double r2 = centre.squaredNorm() - x[2];
+    c.centre = Eigen::Vector2d(-x[0] / 2, -x[1] / 2);
+    const double r2 = c.centre.squaredNorm() - x[2];
     if (!(r2 > 0.0)) return c;
-    c.centre = centre + mean;
     c.radius = std::sqrt(r2);
-    double sum = 0.0;
-    for (const Eigen::Vector2d& q : p) {
-        const double e = (q - c.centre).norm() - c.radius;
-        sum += e * e;
-    }
-    c.rms = std::sqrt(sum / static_cast<double>(p.size()));
     return c;
 }
 
-/// Gap between the bounding boxes of two point sets (0 when they overlap).
-double box_gap(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b) {
-    Eigen::Vector2d lo_a = a.front(), hi_a = a.front(), lo_b = b.front(), hi_b = b.front();
-    for (const Eigen::Vector2d& q : a) {
-        lo_a = lo_a.cwiseMin(q);
-        hi_a = hi_a.cwiseMax(q);
-    }
-    for (const Eigen::Vector2d& q : b) {
-        lo_b = lo_b.cwiseMin(q);
-        hi_b = hi_b.cwiseMax(q);
-    }
-    return (lo_b - hi_a).cwiseMax(lo_a - hi_b).cwiseMax(0.0).norm();
-}
-
-double rms_to(const Circle& c, const std::vector<Eigen::Vector2d>& p) {
+/// Sum of squared radial residuals of points to `c`.
+double radial_sum(const Circle& c, const std::vector<Eigen::Vector2d>& p) {
     double sum = 0.0;
     for (const Eigen::Vector2d& q : p) {
         const double e = (q - c.centre).norm() - c.radius;
         sum += e * e;
     }
-    return p.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(p.size()));
+    return sum;
+}
+
+/// An axis-aligned box of 2-D points (empty until the first point).
+struct Box {
+    double x0 = std::numeric_limits<double>::infinity(), y0 = x0;
+    double x1 = -std::numeric_limits<double>::infinity(), y1 = x1;
+
+    void extend(const Eigen::Vector2d& q) {
+        x0 = std::min(x0, q.x());
+        y0 = std::min(y0, q.y());
+        x1 = std::max(x1, q.x());
+        y1 = std::max(y1, q.y());
+    }
+};
+
+/// Gap between two boxes (0 when they overlap).
+double box_gap(const Box& a, const Box& b) {
+    const double gx = std::max({b.x0 - a.x1, a.x0 - b.x1, 0.0});
+    const double gy = std::max({b.y0 - a.y1, a.y0 - b.y1, 0.0});
+    return std::sqrt(gx * gx + gy * gy);
 }
 
 }  // namespace
@@ -81,50 +100,79 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
     const Eigen::Vector3f helper =
         std::abs(up.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
     const Eigen::Vector3f u = up.cross(helper).normalized(), w = up.cross(u);
+    // Table-plane coordinates about the first point, so that the circle sums stay small.
+    const Eigen::Vector2d origin(u.dot(points[0]), w.dot(points[0]));
+    const auto planar = [&](const Eigen::Vector3f& p) -> Eigen::Vector2d {
+        return Eigen::Vector2d(u.dot(p), w.dot(p)) - origin;
+    };
     std::vector<std::vector<Eigen::Vector2d>> footprint(count), rim(count);
+    std::vector<CircleSums> footprint_sums(count), rim_sums(count);
+    std::vector<Box> footprint_box(count), rim_box(count);
     std::vector<float> top(count, -std::numeric_limits<float>::infinity());
     for (std::size_t k = 0; k < points.size(); ++k) {
-        footprint[component[k]].emplace_back(u.dot(points[k]), w.dot(points[k]));
-        top[component[k]] = std::max(top[component[k]], up.dot(points[k]) + offset);
+        const std::uint32_t g = component[k];
+        footprint[g].push_back(planar(points[k]));
+        footprint_sums[g].add(footprint[g].back());
+        footprint_box[g].extend(footprint[g].back());
+        top[g] = std::max(top[g], up.dot(points[k]) + offset);
     }
     // The upper part of each group, where a container's walls are steep and its outline round.
-    for (std::size_t k = 0; k < points.size(); ++k)
-        if (up.dot(points[k]) + offset >= options.rim_band * top[component[k]])
-            rim[component[k]].emplace_back(u.dot(points[k]), w.dot(points[k]));
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const std::uint32_t g = component[k];
+        if (up.dot(points[k]) + offset >= options.rim_band * top[g]) {
+            rim[g].push_back(planar(points[k]));
+            rim_sums[g].add(rim[g].back());
+            rim_box[g].extend(rim[g].back());
+        }
+    }
+    auto round = [&](const Circle& c) {
+        return c.radius >= options.min_radius && c.radius <= options.max_radius &&
+               c.rms <= options.max_residual * c.radius;
+    };
+    auto plausible = [&](const Circle& c) {  // the radius test alone, before any residual
+        return c.radius >= options.min_radius && c.radius <= options.max_radius;
+    };
     std::vector<std::uint32_t> large;
     std::vector<Circle> circles(count);
     for (std::uint32_t g = 0; g < count; ++g) {
         if (footprint[g].size() < options.min_points) continue;
         large.push_back(g);
-        circles[g] = fit_circle(footprint[g]);
+        Circle& c = circles[g];
+        c = fit_circle(footprint_sums[g]);
+        if (plausible(c))
+            c.rms =
+                std::sqrt(radial_sum(c, footprint[g]) / static_cast<double>(footprint[g].size()));
     }
     DisjointSets sets(count);
-    auto round = [&](const Circle& c) {
-        return c.radius >= options.min_radius && c.radius <= options.max_radius &&
-               c.rms <= options.max_residual * c.radius;
-    };
     // Two parts of one round wall: the upper parts of both lie on one circle.
-    std::vector<Eigen::Vector2d> both;
     for (std::size_t i = 0; i < large.size(); ++i)
         for (std::size_t j = i + 1; j < large.size(); ++j) {
             const std::uint32_t a = large[i], b = large[j];
             if (rim[a].size() < options.min_points / 4 || rim[b].size() < options.min_points / 4)
                 continue;
-            if (box_gap(rim[a], rim[b]) > options.max_shared_gap) continue;
-            both = rim[a];
-            both.insert(both.end(), rim[b].begin(), rim[b].end());
-            const Circle c = fit_circle(both);
-            if (!round(c) || c.radius > options.max_shared_radius) continue;
+            if (box_gap(rim_box[a], rim_box[b]) > options.max_shared_gap) continue;
+            Circle c = fit_circle(rim_sums[a] + rim_sums[b]);
+            if (!plausible(c) || c.radius > options.max_shared_radius) continue;
+            const double sum_a = radial_sum(c, rim[a]), sum_b = radial_sum(c, rim[b]);
+            c.rms = std::sqrt((sum_a + sum_b) / static_cast<double>(rim[a].size() + rim[b].size()));
             const double limit = options.max_shared_residual * c.radius;
-            if (c.rms <= limit && rms_to(c, rim[a]) <= limit && rms_to(c, rim[b]) <= limit)
+            if (!round(c) || c.rms > limit) continue;
+            if (std::sqrt(sum_a / static_cast<double>(rim[a].size())) <= limit &&
+                std::sqrt(sum_b / static_cast<double>(rim[b].size())) <= limit)
                 sets.unite(a, b);
         }
     for (const std::uint32_t outer : large) {
         const Circle& c = circles[outer];
         if (!round(c)) continue;
         const double reach = c.radius + options.margin;
+        Box disc;  // the square around the reach: a footprint outside it has no point inside
+        disc.x0 = c.centre.x() - reach;
+        disc.y0 = c.centre.y() - reach;
+        disc.x1 = c.centre.x() + reach;
+        disc.y1 = c.centre.y() + reach;
         for (const std::uint32_t inner : large) {
             if (inner == outer || top[inner] > top[outer] + options.margin) continue;
+            if (box_gap(disc, footprint_box[inner]) > 0.0) continue;
             std::size_t inside = 0;
             for (const Eigen::Vector2d& q : footprint[inner])
                 inside += (q - c.centre).squaredNorm() <= reach * reach;
