@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace esf::detail {
 
@@ -52,6 +53,58 @@ bool inside_convex(std::span<const Vec2> hull, const Vec2& q) {
             hi = mid;
     }
     return cross(hull[lo], hull[lo + 1], q) >= 0.0;
+}
+
+ConvexRegion::ConvexRegion(std::vector<Vec2> polygon) : polygon_(std::move(polygon)) {
+    Vec2 lo = polygon_.front(), hi = polygon_.front();
+    for (const Vec2& p : polygon_) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+    const float width = hi.x() - lo.x(), height = hi.y() - lo.y();
+    if (!(width > 0.0f && height > 0.0f && std::isfinite(width) && std::isfinite(height)))
+        return;  // no grid: every test takes inside_convex()
+    x0_ = lo.x();
+    y0_ = lo.y();
+    scale_x_ = static_cast<float>(kCells) / width;
+    scale_y_ = static_cast<float>(kCells) / height;
+    constexpr int corners = kCells + 1;
+    std::vector<std::uint8_t> corner_in(corners * corners);
+    for (int j = 0; j < corners; ++j)
+        for (int i = 0; i < corners; ++i) {
+            const Vec2 c(lo.x() + width * static_cast<float>(i) / kCells,
+                         lo.y() + height * static_cast<float>(j) / kCells);
+            corner_in[static_cast<std::size_t>(j * corners + i)] = inside_convex(polygon_, c);
+        }
+    std::vector<std::uint8_t> cell_in(kCells * kCells);
+    for (int j = 0; j < kCells; ++j)
+        for (int i = 0; i < kCells; ++i) {
+            const auto at = [&](int a, int b) {
+                return corner_in[static_cast<std::size_t>(b * corners + a)];
+            };
+            cell_in[static_cast<std::size_t>(j * kCells + i)] =
+                at(i, j) && at(i + 1, j) && at(i, j + 1) && at(i + 1, j + 1);
+        }
+    deep_.assign(kCells * kCells, 0);
+    for (int j = 1; j + 1 < kCells; ++j)
+        for (int i = 1; i + 1 < kCells; ++i) {
+            bool all = true;
+            for (int b = j - 1; b <= j + 1 && all; ++b)
+                for (int a = i - 1; a <= i + 1 && all; ++a)
+                    all = cell_in[static_cast<std::size_t>(b * kCells + a)] != 0;
+            deep_[static_cast<std::size_t>(j * kCells + i)] = all;
+        }
+}
+
+bool ConvexRegion::contains(const Vec2& q) const {
+    if (!deep_.empty()) {
+        const float fx = (q.x() - x0_) * scale_x_, fy = (q.y() - y0_) * scale_y_;
+        if (fx >= 0.0f && fy >= 0.0f && fx < static_cast<float>(kCells) &&
+            fy < static_cast<float>(kCells) &&
+            deep_[static_cast<std::size_t>(static_cast<int>(fy) * kCells + static_cast<int>(fx))])
+            return true;
+    }
+    return inside_convex(polygon_, q);
 }
 
 /// Smallest-area rectangle holding a strictly convex counter-clockwise polygon: one side lies

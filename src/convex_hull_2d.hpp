@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <span>
 #include <vector>
@@ -94,6 +95,25 @@ std::vector<Vec2> convex_hull(std::span<const Vec2> points);
 /// Whether q lies in the convex counter-clockwise polygon `hull` (at least 3 vertices;
 /// boundary included), in O(log n).
 bool inside_convex(std::span<const Vec2> hull, const Vec2& q);
+
+/// A convex counter-clockwise polygon with a grid that answers most point tests in O(1): a cell
+/// of a 64 x 64 grid over the polygon's bounding box is "deep" when it and its eight neighbours
+/// have all their corners inside (by inside_convex); a point in a deep cell is at least a cell
+/// width inside, so it is inside whatever the rounding. Other points take inside_convex().
+/// contains(q) == inside_convex(polygon, q) for every q.
+class ConvexRegion {
+  public:
+    /// `polygon`: at least 3 vertices, counter-clockwise.
+    explicit ConvexRegion(std::vector<Vec2> polygon);
+    bool contains(const Vec2& q) const;
+    const std::vector<Vec2>& polygon() const { return polygon_; }
+
+  private:
+    static constexpr int kCells = 64;
+    std::vector<Vec2> polygon_;
+    float x0_ = 0.0f, y0_ = 0.0f, scale_x_ = 0.0f, scale_y_ = 0.0f;
+    std::vector<std::uint8_t> deep_;  // kCells x kCells, row-major by y
+};
 
 struct Rectangle {
     float length = 0.0f, width = 0.0f;

@@ -35,7 +35,7 @@ std::string format_metres(double value) {
 std::size_t chunk_begin(std::size_t chunk, std::size_t count) { return chunk * count / kChunks; }
 
 using detail::convex_hull;
-using detail::inside_convex;
+using detail::ConvexRegion;
 using detail::min_area_rectangle;
 using detail::monotone_chain;
 using detail::Octagon;
@@ -175,12 +175,13 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     result.plane_found = true;
 
     // Keep the candidates whose projection lies inside the hull (the polygonal prism).
+    const ConvexRegion table(hull);
     std::vector<std::uint8_t> keep(candidates.size());
     parallel_for(kChunks, options.threads, [&](std::size_t c) {
         for (std::size_t k = chunk_begin(c, candidates.size());
              k < chunk_begin(c + 1, candidates.size()); ++k) {
             const Eigen::Vector3f& p = points[candidates[k]];
-            keep[k] = inside_convex(hull, Vec2(u.dot(p), w.dot(p))) ? 1 : 0;
+            keep[k] = table.contains(Vec2(u.dot(p), w.dot(p))) ? 1 : 0;
         }
     });
     std::size_t kept = 0;

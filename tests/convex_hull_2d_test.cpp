@@ -92,6 +92,40 @@ TEST(ConvexHull2d, InsideAgreesWithTheEdgeTests) {
     }
 }
 
+TEST(ConvexHull2d, RegionAgreesWithInsideConvexEverywhere) {
+    // Random hulls, from thin to round; points uniform over and around the bounding box, on the
+    // vertices, on the edges' midpoints and just beside them.
+    std::mt19937 rng(13);
+    std::normal_distribution<float> g(0.0f, 1.0f);
+    for (int trial = 0; trial < 12; ++trial) {
+        std::vector<Vec2> points(30 + 40 * trial);
+        const float aspect = 0.05f + 0.1f * static_cast<float>(trial);
+        for (Vec2& p : points) p = Vec2(3.0f * g(rng), aspect * g(rng));
+        const std::vector<Vec2> hull = esf::detail::monotone_chain(points);
+        ASSERT_GE(hull.size(), 3u);
+        const esf::detail::ConvexRegion region(hull);
+        EXPECT_EQ(region.polygon(), hull);
+        std::vector<Vec2> queries;
+        std::uniform_real_distribution<float> ux(-12.0f, 12.0f), uy(-4.0f * aspect, 4.0f * aspect);
+        for (int i = 0; i < 4000; ++i) queries.emplace_back(ux(rng), uy(rng));
+        for (std::size_t k = 0; k < hull.size(); ++k) {
+            const Vec2 mid = 0.5f * (hull[k] + hull[(k + 1) % hull.size()]);
+            queries.push_back(hull[k]);
+            queries.push_back(mid);
+            for (const float e : {1e-6f, 1e-4f})
+                for (const Vec2& d : {Vec2(e, 0.0f), Vec2(-e, 0.0f), Vec2(0.0f, e), Vec2(0.0f, -e)})
+                    queries.push_back(mid + d);
+        }
+        std::size_t inside = 0;
+        for (const Vec2& q : queries) {
+            const bool want = esf::detail::inside_convex(hull, q);
+            inside += want;
+            EXPECT_EQ(region.contains(q), want) << trial << ": " << q.transpose();
+        }
+        EXPECT_GT(inside, queries.size() / 10) << trial;  // the test covers both answers
+    }
+}
+
 TEST(ConvexHull2d, SmallestRectangleOfARotatedRectangle) {
     const float angle = 0.4f, length = 3.0f, width = 1.25f;
     const Vec2 a(std::cos(angle), std::sin(angle)), b(-a.y(), a.x());
