@@ -128,6 +128,8 @@ class Recognizer:
         descriptor: str = "",
         use_weights: bool = True,
         samplings: int = 1,
+        vote: str = "nearest",
+        every_view: bool = False,
         threads: int = 0,
     ) -> None: ...
     def classify(self, points: PointsLike, k: int | None = None) -> Classification: ...

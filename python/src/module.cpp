@@ -601,12 +601,15 @@ PYBIND11_MODULE(_esf, m) {
                            "A trained database, opened read-only, with its k-NN index. Immutable "
                            "and thread-safe: its methods release the GIL.")
         .def(py::init([](const fs::path& database, std::size_t k, const std::string& descriptor,
-                         bool use_weights, int samplings, int threads) {
+                         bool use_weights, int samplings, const std::string& vote,
+                         bool every_view, int threads) {
                  RecognizerOptions options;
                  options.k = k;
                  options.descriptor = descriptor;
                  options.use_weights = use_weights;
                  options.query_samplings = samplings;
+                 options.vote = parse_vote_rule(vote);
+                 options.one_view_per_model = !every_view;
                  options.threads = threads;
                  py::gil_scoped_release release;
                  return with_files({&database}, [&] {
@@ -614,11 +617,14 @@ PYBIND11_MODULE(_esf, m) {
                  });
              }),
              py::arg("database"), py::kw_only(), py::arg("k") = 10, py::arg("descriptor") = "",
-             py::arg("use_weights") = true, py::arg("samplings") = 1, py::arg("threads") = 0,
-             "Opens DATABASE (esf train ... -o DATABASE): ``k`` views vote; ``descriptor`` picks "
-             "the kind when it holds several; ``use_weights`` applies its learned weights; "
-             "``samplings`` describes an ESF query that many times and averages; ``threads`` "
-             "0 = all cores. Raises FileNotFoundError / OSError for a missing or broken file, "
+             py::arg("use_weights") = true, py::arg("samplings") = 1, py::arg("vote") = "nearest",
+             py::arg("every_view") = false, py::arg("threads") = 0,
+             "Opens DATABASE (esf train ... -o DATABASE): the ``k`` nearest models (each by its "
+             "nearest view; ``every_view``: the k nearest views) are the neighbours; ``vote`` "
+             "'nearest' names the nearest one's class (the others give the confidence), "
+             "'majority' the most frequent; ``descriptor`` picks the kind when it holds several; "
+             "``use_weights`` applies its learned weights; ``samplings`` describes a query that "
+             "many times and averages; ``threads`` 0 = all cores. Raises FileNotFoundError / OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")
         .def("classify", &classify_py, py::arg("points"), py::arg("k") = py::none(),
              "Classifies one object's cloud ((N, 3) or (H, W, 3)) by the vote of its k nearest "

@@ -51,6 +51,25 @@ def test_classify_equals_the_cli(cli, database, test_set):
         assert [n.model for n in c.neighbours] == [n["model"] for n in expected["neighbours"]]
 
 
+def test_one_view_per_model_and_the_vote_rule(database, test_set):
+    points = test_set[1][0][0]
+    per_model = esf.Recognizer(database).classify(points)
+    assert len({n.model for n in per_model.neighbours}) == len(per_model.neighbours)
+    assert per_model.class_name == per_model.neighbours[0].class_name  # the nearest names it
+    views = esf.Recognizer(database, every_view=True).classify(points)
+    assert views.neighbours[0].distance == per_model.neighbours[0].distance
+    # The k nearest views lie no farther than the k nearest models' views.
+    assert all(v.distance <= m.distance for v, m in zip(views.neighbours, per_model.neighbours))
+    majority = esf.Recognizer(database, every_view=True, vote="majority").classify(points)
+    counts = {}
+    for n in majority.neighbours:
+        counts[n.class_name] = counts.get(n.class_name, 0) + 1
+    assert counts[majority.class_name] == max(counts.values())
+    assert majority.confidence == pytest.approx(counts[majority.class_name] / 10)
+    with pytest.raises(ValueError, match="vote rule 'best'"):
+        esf.Recognizer(database, vote="best")
+
+
 def test_classify_with_another_k(database, test_set):
     points = test_set[1][0][0]
     recognizer = esf.Recognizer(database)
