@@ -601,8 +601,8 @@ PYBIND11_MODULE(_esf, m) {
                            "A trained database, opened read-only, with its k-NN index. Immutable "
                            "and thread-safe: its methods release the GIL.")
         .def(py::init([](const fs::path& database, std::size_t k, const std::string& descriptor,
-                         bool use_weights, int samplings, const std::string& vote,
-                         bool every_view, int threads) {
+                         bool use_weights, int samplings, const std::string& vote, bool every_view,
+                         int threads) {
                  RecognizerOptions options;
                  options.k = k;
                  options.descriptor = descriptor;
@@ -624,7 +624,8 @@ PYBIND11_MODULE(_esf, m) {
              "'nearest' names the nearest one's class (the others give the confidence), "
              "'majority' the most frequent; ``descriptor`` picks the kind when it holds several; "
              "``use_weights`` applies its learned weights; ``samplings`` describes a query that "
-             "many times and averages; ``threads`` 0 = all cores. Raises FileNotFoundError / OSError for a missing or broken file, "
+             "many times and averages; ``threads`` 0 = all cores. Raises FileNotFoundError / "
+             "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")
         .def("classify", &classify_py, py::arg("points"), py::arg("k") = py::none(),
              "Classifies one object's cloud ((N, 3) or (H, W, 3)) by the vote of its k nearest "
