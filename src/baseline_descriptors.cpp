@@ -38,6 +38,7 @@
 
 #include "baseline_descriptors.hpp"
 
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <pcl/common/common.h>
 #include <pcl/features/cvfh.h>
@@ -52,6 +53,7 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -59,7 +61,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <iterator>
 #include <mutex>
 #include <stdexcept>
@@ -67,6 +68,7 @@
 #include <utility>
 #include <vector>
 
+#include "baseline_child.hpp"
 #include "esf/esf_descriptor.hpp"
 
 namespace esf::detail {
@@ -324,68 +326,74 @@ class Cvfh final : public PclBaseline {
     }
 };
 
-/// Runs `describe` in a forked child process and returns what it returns. PCL 1.13's
-/// OURCVFHEstimation aborts on an Eigen assertion (or, built without assertions, writes out of
-/// bounds) when a smooth region keeps a single point after its refinement: the region's
-/// reference frame (sgurf) divides by a zero weight sum and comes out NaN. Real views of round
-/// objects do this (e.g. a YCB apple seen from some directions). In a child process such a cloud
-/// fails alone and is reported as not describable; the caller goes on.
-std::vector<Signature> describe_in_child(const std::function<std::vector<Signature>()>& describe,
+/// The helper executable beside this module (baseline_child.hpp): the module's own folder,
+/// found through the dynamic linker.
+std::string child_path() {
+    Dl_info info{};
+    if (::dladdr(reinterpret_cast<const void*>(&child_path), &info) == 0 || !info.dli_fname)
+        throw std::runtime_error("our-cvfh: cannot tell where the baselines module lies");
+    const std::string module = info.dli_fname;
+    const std::size_t slash = module.rfind('/');
+    return (slash == std::string::npos ? std::string(".") : module.substr(0, slash)) +
+           "/esf_baseline_child";
+}
+
+/// Runs our-cvfh on `points` in the helper process (posix_spawn, never fork()) and returns its
+/// signatures; a crash there is this cloud's failure, not the caller's.
+std::vector<Signature> describe_in_child(const Points& points, const DescriptorOptions& options,
                                          const std::string& name) {
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error(name + ": pipe() failed");
-    const pid_t pid = ::fork();
-    if (pid < 0) {
-        ::close(fds[0]);
-        ::close(fds[1]);
-        throw std::runtime_error(name + ": fork() failed");
+    const std::string helper = child_path();
+    if (::access(helper.c_str(), X_OK) != 0)
+        throw std::runtime_error(name + ": its helper " + helper +
+                                 " is missing (install the baselines component)");
+    int in[2], out[2];
+    if (::pipe2(in, O_CLOEXEC) != 0) throw std::runtime_error(name + ": pipe() failed");
+    if (::pipe2(out, O_CLOEXEC) != 0) {
+        ::close(in[0]);
+        ::close(in[1]);
+        throw std::runtime_error(name + ": pipe() failed");
     }
-    if (pid == 0) {  // the child: describe, write the result, leave without cleaning up
-        ::close(fds[0]);
-        // PCL's warnings and its assertion message stay in the child: the failure is reported.
-        const int null = ::open("/dev/null", O_WRONLY);
-        if (null >= 0) ::dup2(null, STDERR_FILENO);
-        std::string message;
-        std::vector<float> data;
-        std::uint64_t header[3] = {0, 0, 0};  // status (0 ok, 1 error), signatures, dimension
-        try {
-            const std::vector<Signature> signatures = describe();
-            header[1] = signatures.size();
-            header[2] = signatures.empty() ? 0 : signatures[0].size();
-            for (const Signature& sig : signatures) data.insert(data.end(), sig.begin(), sig.end());
-        } catch (const std::exception& e) {
-            header[0] = 1;
-            message = e.what();
-            header[1] = message.size();
-        }
-        const auto write_all = [&](const void* bytes, std::size_t size) {
-            const char* at = static_cast<const char*>(bytes);
-            while (size > 0) {
-                const ssize_t n = ::write(fds[1], at, size);
-                if (n <= 0) ::_exit(3);
-                at += n;
-                size -= static_cast<std::size_t>(n);
-            }
-        };
-        write_all(header, sizeof header);
-        if (header[0] == 0)
-            write_all(data.data(), data.size() * sizeof(float));
-        else
-            write_all(message.data(), message.size());
-        ::_exit(0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
+    posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
+    // PCL's warnings and its assertion message stay with the child: the failure is reported.
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+    char* argv[] = {const_cast<char*>(helper.c_str()), nullptr};
+    char* envp[] = {nullptr};
+    pid_t pid = 0;
+    const int spawned = ::posix_spawn(&pid, helper.c_str(), &actions, nullptr, argv, envp);
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(in[0]);
+    ::close(out[1]);
+    if (spawned != 0) {
+        ::close(in[1]);
+        ::close(out[0]);
+        throw std::runtime_error(name + ": cannot start " + helper + ": " + std::strerror(spawned));
     }
-    ::close(fds[1]);
+    // The child reads the whole request before it writes: send it all, then read the reply.
+    const std::string request = encode_child_request(points, options);
+    const char* at = request.data();
+    std::size_t left = request.size();
+    while (left > 0) {
+        const ssize_t n = ::write(in[1], at, left);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;  // the child died: its status says why
+        at += n;
+        left -= static_cast<std::size_t>(n);
+    }
+    ::close(in[1]);
     std::vector<char> bytes;
     char buffer[1 << 16];
     for (;;) {
-        const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+        const ssize_t n = ::read(out[0], buffer, sizeof buffer);
         if (n > 0) {
             bytes.insert(bytes.end(), buffer, buffer + n);
         } else if (n == 0 || errno != EINTR) {
             break;
         }
     }
-    ::close(fds[0]);
+    ::close(out[0]);
     int status = 0;
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
@@ -404,7 +412,7 @@ std::vector<Signature> describe_in_child(const std::function<std::vector<Signatu
         if (payload_size != header[1]) throw std::runtime_error(name + ": truncated result");
         throw std::invalid_argument(std::string(payload, payload_size));
     }
-    if (payload_size != header[1] * header[2] * sizeof(float))
+    if (header[2] > 100000 || payload_size != header[1] * header[2] * sizeof(float))
         throw std::runtime_error(name + ": truncated result");
     std::vector<Signature> signatures(header[1], Signature(header[2]));
     for (std::size_t i = 0; i < signatures.size(); ++i)
@@ -418,20 +426,8 @@ class OurCvfh final : public PclBaseline {
     using PclBaseline::PclBaseline;
 
     std::vector<Signature> compute(std::span<const Eigen::Vector3f> input) const override {
-        const Prepared p =
-            prepare(describable_points(input, info_.name), options_, true, info_.name);
-        return describe_in_child(
-            [&] {
-                pcl::OURCVFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> cvfh;
-                set_cvfh_parameters(cvfh, p);
-                cvfh.setAxisRatio(0.8f);
-                cvfh.setMinAxisValue(0.925f);
-                cvfh.setRefineClusters(1.0f);
-                pcl::PointCloud<pcl::VFHSignature308> out;
-                cvfh.compute(out);
-                return finish_multi(vfh_signatures(out), info_.name);
-            },
-            info_.name);
+        // Errors that need no PCL come from here; the rest from the helper.
+        return describe_in_child(describable_points(input, info_.name), options_, info_.name);
     }
 };
 
@@ -498,7 +494,86 @@ std::unique_ptr<GlobalDescriptor> make_baseline(const DescriptorInfo& info,
 
 constexpr BaselineModule kModule = {kBaselineModuleAbi, &make_baseline};
 
+template <typename T>
+void append(std::string& out, const T& value) {
+    out.append(reinterpret_cast<const char*>(&value), sizeof value);
+}
+
+template <typename T>
+T take(const std::string& in, std::size_t& at) {
+    if (in.size() - at < sizeof(T))
+        throw std::invalid_argument("our-cvfh helper: truncated request");
+    T value;
+    std::memcpy(&value, in.data() + at, sizeof value);
+    at += sizeof value;
+    return value;
+}
+
 }  // namespace
+
+std::vector<Signature> our_cvfh_signatures(const Points& points, const DescriptorOptions& options,
+                                           const std::string& name) {
+    const Prepared p = prepare(describable_points(points, name), options, true, name);
+    pcl::OURCVFHEstimation<pcl::PointXYZ, pcl::Normal, pcl::VFHSignature308> cvfh;
+    set_cvfh_parameters(cvfh, p);
+    cvfh.setAxisRatio(0.8f);
+    cvfh.setMinAxisValue(0.925f);
+    cvfh.setRefineClusters(1.0f);
+    pcl::PointCloud<pcl::VFHSignature308> out;
+    cvfh.compute(out);
+    return finish_multi(vfh_signatures(out), name);
+}
+
+std::string encode_child_request(const Points& points, const DescriptorOptions& options) {
+    std::string out = "ESFC";
+    out.reserve(4 + 8 + points.size() * 12 + 9);
+    append(out, static_cast<std::uint64_t>(points.size()));
+    for (const Eigen::Vector3f& p : points) {
+        append(out, p.x());
+        append(out, p.y());
+        append(out, p.z());
+    }
+    append(out, options.leaf_factor);
+    append(out, options.normal_radius_factor);
+    append(out, static_cast<std::uint8_t>(options.remove_outliers ? 1 : 0));
+    return out;
+}
+
+void decode_child_request(const std::string& bytes, Points& points, DescriptorOptions& options) {
+    if (bytes.compare(0, 4, "ESFC") != 0)
+        throw std::invalid_argument("our-cvfh helper: not a request");
+    std::size_t at = 4;
+    const auto count = take<std::uint64_t>(bytes, at);
+    if (count > (bytes.size() - at) / 12)
+        throw std::invalid_argument("our-cvfh helper: truncated request");
+    points.resize(count);
+    for (Eigen::Vector3f& p : points) {
+        p.x() = take<float>(bytes, at);
+        p.y() = take<float>(bytes, at);
+        p.z() = take<float>(bytes, at);
+    }
+    options.leaf_factor = take<float>(bytes, at);
+    options.normal_radius_factor = take<float>(bytes, at);
+    options.remove_outliers = take<std::uint8_t>(bytes, at) != 0;
+}
+
+std::string encode_child_reply(const std::vector<Signature>& signatures) {
+    std::string out;
+    append(out, std::uint64_t{0});
+    append(out, static_cast<std::uint64_t>(signatures.size()));
+    append(out, static_cast<std::uint64_t>(signatures.empty() ? 0 : signatures[0].size()));
+    for (const Signature& s : signatures)
+        out.append(reinterpret_cast<const char*>(s.data()), s.size() * sizeof(float));
+    return out;
+}
+
+std::string encode_child_error(const std::string& message) {
+    std::string out;
+    append(out, std::uint64_t{1});
+    append(out, static_cast<std::uint64_t>(message.size()));
+    append(out, std::uint64_t{0});
+    return out + message;
+}
 
 }  // namespace esf::detail
 

@@ -35,9 +35,10 @@
 // Thread safety: compute() is const and may run concurrently on one object from any number of
 // threads; each call builds its own PCL objects. pcl-esf serialises its calls (PCL draws from
 // the process-global rand(), reseeded from time() on every call), so it is thread-safe but
-// neither reproducible nor parallel. our-cvfh runs PCL in a forked child process per call: PCL
-// 1.13's OURCVFHEstimation aborts (or writes out of bounds) when a refined smooth region keeps a
-// single point, which real views of round objects do; such a cloud then fails alone with a
+// neither reproducible nor parallel. our-cvfh runs PCL in a helper process per call
+// (esf_baseline_child beside the module, started with posix_spawn, never fork()): PCL 1.13's
+// OURCVFHEstimation aborts (or writes out of bounds) when a refined smooth region keeps a single
+// point, which real views of round objects do; such a cloud then fails alone with a
 // std::invalid_argument. PCL prints its own warnings (e.g. OUR-CVFH's "Both axes
 // are equally easy/difficult to disambiguate") through pcl::console; an application silences
 // them with pcl::console::setVerbosityLevel(pcl::console::L_ERROR).

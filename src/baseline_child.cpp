@@ -1,0 +1,54 @@
+// esf_baseline_child: runs our-cvfh for the baselines module on one cloud read from stdin and
+// writes the signatures to stdout (protocol: baseline_child.hpp). Started by the module with
+// posix_spawn; a crash of PCL ends this process only.
+
+#include "baseline_child.hpp"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <exception>
+#include <iterator>
+#include <string>
+
+namespace {
+
+bool write_all(const std::string& bytes) {
+    const char* at = bytes.data();
+    std::size_t left = bytes.size();
+    while (left > 0) {
+        const ssize_t n = ::write(STDOUT_FILENO, at, left);
+        if (n <= 0) return false;
+        at += n;
+        left -= static_cast<std::size_t>(n);
+    }
+    return true;
+}
+
+}  // namespace
+
+int main() {
+    std::string request;
+    char buffer[1 << 16];
+    for (;;) {
+        const ssize_t n = ::read(STDIN_FILENO, buffer, sizeof buffer);
+        if (n > 0) {
+            request.append(buffer, static_cast<std::size_t>(n));
+        } else if (n == 0) {
+            break;
+        } else if (errno != EINTR) {
+            return 3;
+        }
+    }
+    std::string reply;
+    try {
+        esf::Points points;
+        esf::DescriptorOptions options;
+        esf::detail::decode_child_request(request, points, options);
+        reply = esf::detail::encode_child_reply(
+            esf::detail::our_cvfh_signatures(points, options, "our-cvfh"));
+    } catch (const std::exception& e) {
+        reply = esf::detail::encode_child_error(e.what());
+    }
+    return write_all(reply) ? 0 : 3;
+}
