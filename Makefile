@@ -78,6 +78,7 @@ fuzz:
 	@scripts/install-deps.sh fuzz
 	@CC=$(FUZZ_CC) CXX=$(FUZZ_CXX) cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 		-DESF_FUZZ=ON -DESF_BUILD_APPS=OFF -DESF_BUILD_TESTS=OFF -DESF_BUILD_BENCH=OFF \
+		-DESF_WITH_PCL=OFF -DESF_PYTHON=OFF \
 		-DCMAKE_CXX_FLAGS="$(FUZZ_FLAGS) -fsanitize=fuzzer-no-link" \
 		-DCMAKE_EXE_LINKER_FLAGS="$(FUZZ_FLAGS)" $(CMAKE_FLAGS) \
 		> $(FUZZ_BUILD).configure.log || (cat $(FUZZ_BUILD).configure.log; exit 1)
