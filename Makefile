@@ -72,7 +72,7 @@ FUZZ_BUILD ?= build-fuzz
 FUZZ_CC ?= clang-16
 FUZZ_CXX ?= clang++-16
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS := pcd ply_cloud xyz depth_png test_set catalog scene_set database
+FUZZ_TARGETS := pcd ply_cloud xyz depth_png test_set catalog scene_set database mesh
 FUZZ_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
 fuzz:
 	@scripts/install-deps.sh fuzz
