@@ -53,12 +53,17 @@ test-nopcl: deps
 # Under ASan, Eigen stops trusting malloc's alignment and frees with its own allocator; PCL's
 # (uninstrumented) libraries trust it, so a PCL cloud freed by our code looked like a heap
 # overflow. EIGEN_MALLOC_ALREADY_ALIGNED=1 makes our code allocate as PCL does.
+# The PCL baselines module links the runtimes too (it is linked with --no-undefined). The Python
+# module is left out: CPython would have to preload libasan to import it (`make test` runs the
+# Python tests).
 SANITIZE_BUILD ?= build-sanitize
 SANITIZE_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 sanitize: deps
 	@cmake -S . -B $(SANITIZE_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DESF_WERROR=$(WERROR) \
-		-DESF_BUILD_BENCH=OFF -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS) -Wno-error=maybe-uninitialized -DEIGEN_MALLOC_ALREADY_ALIGNED=1" \
-		-DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" $(CMAKE_FLAGS) \
+		-DESF_BUILD_BENCH=OFF -DESF_PYTHON=OFF \
+		-DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS) -Wno-error=maybe-uninitialized -DEIGEN_MALLOC_ALREADY_ALIGNED=1" \
+		-DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_MODULE_LINKER_FLAGS="$(SANITIZE_FLAGS)" \
+		-DCMAKE_SHARED_LINKER_FLAGS="$(SANITIZE_FLAGS)" $(CMAKE_FLAGS) \
 		> $(SANITIZE_BUILD).configure.log || (cat $(SANITIZE_BUILD).configure.log; exit 1)
 	@cmake --build $(SANITIZE_BUILD) -j $(JOBS)
 	@cd $(SANITIZE_BUILD) && ASAN_OPTIONS=$(ESF_ASAN_OPTIONS) UBSAN_OPTIONS=$(ESF_UBSAN_OPTIONS) \
