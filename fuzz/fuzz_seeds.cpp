@@ -13,6 +13,7 @@
 #include "esf/cloud_io.hpp"
 #include "esf/database.hpp"
 #include "esf/depth_image.hpp"
+#include "esf/mesh.hpp"
 
 namespace {
 
@@ -143,6 +144,45 @@ void database_seeds(const fs::path& dir) {
     fs::remove(path);
 }
 
+// mesh_fuzz: the first byte names the file (0 .ply, 1 .off, 2 .stl, 3 .obj), the rest is the file.
+void mesh_seeds(const fs::path& dir) {
+    esf::Mesh tet;
+    tet.vertices = {{0.f, 0.f, 0.f}, {1.f, 0.f, 0.f}, {0.f, 1.f, 0.f}, {0.f, 0.f, 1.f}};
+    tet.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    fs::create_directories(dir);
+    const fs::path ply = dir / "tmp.ply";
+    esf::write_ply_mesh(ply.string(), tet);
+    write_file(dir / "binary.ply.seed", std::string(1, '\0') + read_file(ply));
+    fs::remove(ply);
+    write_file(dir / "ascii.ply.seed",
+               std::string(1, '\0') +
+                   "ply\nformat ascii 1.0\ncomment esf\nelement vertex 4\nproperty float x\n"
+                   "property float y\nproperty float z\nelement face 2\n"
+                   "property list uchar int vertex_indices\nend_header\n"
+                   "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n4 0 1 3 2\n");
+    write_file(dir / "tet.off.seed", std::string(1, '\1') +
+                                         "OFF\n# a tetrahedron\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n"
+                                         "0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    std::string stl(1, '\2');
+    stl += "binary STL written by esf_fuzz_seeds";
+    stl.resize(81, '\0');
+    const std::uint32_t count = 2;
+    for (int b = 0; b < 4; ++b) stl.push_back(static_cast<char>((count >> (8 * b)) & 0xffu));
+    for (std::size_t t = 0; t < count; ++t) {
+        float facet[12] = {0, 0, 1};  // the normal, then three corners
+        for (int k = 0; k < 3; ++k) facet[3 + 3 * k + k] = 1.0f + static_cast<float>(t);
+        stl.append(reinterpret_cast<const char*>(facet), sizeof facet);
+        stl.append(2, '\0');  // the attribute
+    }
+    write_file(dir / "binary.stl.seed", stl);
+    write_file(dir / "ascii.stl.seed",
+               std::string(1, '\2') +
+                   "solid tri\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                   "vertex 0 1 0\nendloop\nendfacet\nendsolid tri\n");
+    write_file(dir / "quad.obj.seed",
+               std::string(1, '\3') + "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -158,6 +198,7 @@ int main(int argc, char** argv) {
         depth_png_seeds(root / "depth_png");
         csv_seeds(root);
         database_seeds(root / "database");
+        mesh_seeds(root / "mesh");
     } catch (const std::exception& e) {
         std::cerr << "esf_fuzz_seeds: " << e.what() << "\n";
         return 2;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <bit>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -23,9 +24,11 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "esf/error.hpp"
+#include "mesh_checks.hpp"
 
 namespace esf {
 namespace {
@@ -109,7 +112,22 @@ void check_ply_lists(std::istream& in, const std::string& path,
     if (!has_list) return;  // the counts were checked against the file size
     std::string line;
     for (const Element& e : elements) {
-        const auto count = static_cast<std::uint64_t>(e.count);
+        // Counts beyond 2^64 are as good as endless: the bytes or lines run out first.
+        const std::uint64_t count = e.count < 0x1p64 ? static_cast<std::uint64_t>(e.count)
+                                                     : std::numeric_limits<std::uint64_t>::max();
+        if (binary && std::none_of(e.layout.begin(), e.layout.end(),
+                                   [](const auto& p) { return p.count_size != 0; })) {
+            // Fixed-size elements (none, when the element has no property) are skipped whole:
+            // their bytes were checked against the file size.
+            const auto bytes = static_cast<std::uint64_t>(e.min_bytes) * count;
+            if (e.min_bytes > 0 && bytes > remaining)
+                fail(e, 0, "truncated (the elements need more bytes than are left)");
+            if (e.min_bytes > 0) {
+                in.ignore(static_cast<std::streamsize>(bytes));
+                remaining -= bytes;
+            }
+            continue;
+        }
         for (std::uint64_t i = 0; i < count; ++i) {
             if (binary) {
                 for (const auto& p : e.layout) {
@@ -244,8 +262,9 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
     const double available = static_cast<double>(file_size) - static_cast<double>(header_bytes);
     double need = 0.0;
     for (const Element& e : elements) {
-        // ASCII needs at least one digit and a separator per property.
-        need += e.count * (binary ? e.min_bytes : 2.0 * e.properties);
+        // ASCII needs at least one digit and a separator per property. An element without
+        // properties counts as a byte: Assimp keeps a record of every one it reads.
+        need += e.count * std::max(1.0, binary ? e.min_bytes : 2.0 * e.properties);
         if (need > available) {
             std::ostringstream reason;
             reason << "truncated PLY: the header announces " << e.count << " " << e.name
@@ -333,6 +352,49 @@ void check_off(const std::string& path, std::uintmax_t file_size) {
     }
 }
 
+// A binary STL is an 80-byte header, a little-endian uint32 triangle count and 50 bytes a
+// triangle. Assimp 5.2 takes a file for one when 84 + 50 x count, computed in 32 bits, equals the
+// file size, so a count that wraps around (2^31 + 1 in a 134-byte file) is read as binary STL;
+// only its own later check, in 64 bits, stops it short of allocating 3 x count corners. The count
+// is checked here, in 64 bits, before Assimp sees the file, for files Assimp may read as STL
+// (named .stl, or with "stl" or "solid" in their first 200 bytes, as Assimp's own test): a count
+// matching only in 32 bits is an error, as is any mismatch in a .stl file that is not ASCII (ASCII
+// STL starts with "solid" and has no count).
+void check_stl(const std::string& path, std::uintmax_t file_size) {
+    constexpr std::size_t kHeader = 84;
+    if (file_size < kHeader) return;  // not binary STL for Assimp either
+    std::ifstream in(path, std::ios::binary);
+    char bytes[200] = {};
+    in.read(bytes, sizeof bytes);
+    const auto got = static_cast<std::size_t>(in.gcount());
+    if (got < kHeader) return;
+    std::string head;  // lower case, NUL bytes dropped (Assimp's signature test does the same)
+    for (std::size_t i = 0; i < got; ++i)
+        if (bytes[i] != '\0')
+            head.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(bytes[i]))));
+    std::string extension = std::filesystem::path(path).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const bool named_stl = extension == ".stl";
+    if (!named_stl && head.find("stl") == std::string::npos &&
+        head.find("solid") == std::string::npos)
+        return;
+    std::uint32_t count = 0;
+    for (std::size_t b = 0; b < 4; ++b)
+        count |= std::uint32_t{static_cast<unsigned char>(bytes[80 + b])} << (8 * b);
+    const std::uint64_t need = kHeader + 50 * std::uint64_t{count};
+    if (need == file_size) return;
+    const bool wraps = static_cast<std::uint32_t>(need) == static_cast<std::uint32_t>(file_size);
+    const std::size_t text = std::string_view(bytes, got).find_first_not_of(" \t\r\n");
+    const bool ascii =
+        text != std::string_view::npos && std::string_view(bytes, got).substr(text, 5) == "solid";
+    if (wraps || (named_stl && !ascii))
+        throw IoError(file_message(path, 0,
+                                   "truncated binary STL: the header announces " +
+                                       std::to_string(count) + " triangles, needing " +
+                                       std::to_string(need) + " bytes, but the file has " +
+                                       std::to_string(file_size)));
+}
+
 /// Assimp's file access for one model: regular files in the model's folder or below it (the
 /// folder as named, with its links resolved, or the one a symbolic link to the model leads to).
 /// Anything else (a material library or glTF buffer outside the folder, a FIFO, a device) does not
@@ -379,6 +441,12 @@ class FolderIOSystem : public Assimp::DefaultIOSystem {
 };
 
 }  // namespace
+
+void detail::check_mesh_file(const std::string& path, std::uintmax_t file_size) {
+    check_ply_header(path, file_size);
+    check_off(path, file_size);
+    check_stl(path, file_size);
+}
 
 Eigen::Vector3f Mesh::min_corner() const {
     if (vertices.empty()) throw std::invalid_argument("min_corner: mesh has no vertex");
@@ -431,8 +499,7 @@ Mesh load_mesh(const std::string& path) {
     if (file_size == 0) throw IoError(file_message(path, 0, "empty file"));
     if (!std::filesystem::is_regular_file(path, ec))
         throw IoError(file_message(path, 0, "not a regular file"));
-    check_ply_header(path, file_size);
-    check_off(path, file_size);
+    detail::check_mesh_file(path, file_size);
 
     Assimp::Importer importer;
     importer.SetIOHandler(new FolderIOSystem(path));  // the importer owns and deletes it

@@ -1,10 +1,15 @@
 #!/usr/bin/env bash
 # Installs a built esf into a temporary prefix and builds and runs tests/package_consumer
 # against it with find_package(esf 0.1); also checks that the version file refuses esf 9.
-#   tests/check_package.sh BUILD_DIR
+#   tests/check_package.sh BUILD_DIR [CXX_FLAGS [LINKER_FLAGS]]
+# CXX_FLAGS, LINKER_FLAGS: how BUILD_DIR compiled and linked its programs, for the consumer to do
+# the same (the static libraries of a sanitizer build need the sanitizer runtimes); empty for a
+# plain build.
 set -euo pipefail
 build=$(cd "$1" && pwd)
 source_dir=$(cd "$(dirname "$0")/.." && pwd)
+cxx_flags="${2:-}"
+linker_flags="${3:-}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" > "$work/install.log"
@@ -13,7 +18,9 @@ test -f "$work/prefix/lib/cmake/esf/esfConfigVersion.cmake" ||
     { echo "check_package: no esfConfigVersion.cmake" >&2; exit 1; }
 "$work/prefix/bin/esf" --version
 cmake -S "$source_dir/tests/package_consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
-    -DCMAKE_PREFIX_PATH="$work/prefix" > "$work/configure.log" ||
+    -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_CXX_FLAGS="$cxx_flags" \
+    -DCMAKE_EXE_LINKER_FLAGS="$linker_flags" \
+    > "$work/configure.log" ||
     { cat "$work/configure.log" >&2; exit 1; }
 cmake --build "$work/consumer" > "$work/build.log" || { cat "$work/build.log" >&2; exit 1; }
 "$work/consumer/consumer" "$work"

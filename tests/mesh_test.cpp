@@ -351,6 +351,70 @@ TEST_F(MeshTest, PlyListLengthsAreCheckedBeforeAssimp) {
               1u);
 }
 
+TEST_F(MeshTest, APlyElementWithoutPropertiesCountsAsAByte) {
+    // 1e18 elements of nothing in a binary file: the list check looped over every one of them,
+    // and Assimp keeps a record of each.
+    std::string binary =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nelement nothing 1000000000000000000\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const std::size_t header = binary.size();
+    for (const float v : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f})
+        binary.append(reinterpret_cast<const char*>(&v), 4);
+    binary += std::string("\x03\0\0\0\0\x01\0\0\0\x02\0\0\0", 13);
+    const std::string path = write("nothing.ply", binary);
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path +
+                  ": truncated PLY: the header announces 1e+18 nothing elements, needing at least "
+                  "1e+18 bytes with those before them, but " +
+                  std::to_string(binary.size() - header) + " bytes follow the header");
+}
+
+// A binary STL: an 80-byte header, a little-endian triangle count, 50 bytes a triangle (normal,
+// three corners, a 16-bit attribute).
+std::string binary_stl(const std::string& header, std::uint32_t count,
+                       const std::vector<Triangle>& triangles) {
+    std::string out = header;
+    out.resize(80, '\0');
+    for (int b = 0; b < 4; ++b) out.push_back(static_cast<char>((count >> (8 * b)) & 0xffu));
+    for (const Triangle& t : triangles) {
+        const float normal[3] = {0, 0, 1};
+        out.append(reinterpret_cast<const char*>(normal), sizeof normal);
+        for (const auto& corner : t)
+            out.append(reinterpret_cast<const char*>(corner.data()), 3 * sizeof(float));
+        out.append(2, '\0');
+    }
+    return out;
+}
+
+TEST_F(MeshTest, BinaryStlTriangleCountIsCheckedAgainstTheFileSize) {
+    const std::vector<Triangle> one = {{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}}};
+    const esf::Mesh mesh = esf::load_mesh(write("one.stl", binary_stl("esf test", 1, one)));
+    EXPECT_EQ(mesh.triangles.size(), 1u);
+    EXPECT_EQ(mesh.vertices.size(), 3u);
+
+    // 2^31 + 1 triangles: 84 + 50 x count is the file's 134 bytes in 32 bits, which Assimp 5.2
+    // takes for a binary STL (only its own later check stops it allocating 6e9 corners). The
+    // header may start with "solid" too: Assimp tries binary first.
+    for (const char* header : {"esf test", "solid esf"}) {
+        const std::string wraps = write("wraps.stl", binary_stl(header, (1u << 31) + 1u, one));
+        EXPECT_EQ(error_of([&] { esf::load_mesh(wraps); }),
+                  wraps +
+                      ": truncated binary STL: the header announces 2147483649 triangles, "
+                      "needing 107374182534 bytes, but the file has 134");
+    }
+    // Named anything else, with "STL" in its header: Assimp still reads it as STL.
+    const std::string named_bin =
+        write("wraps.bin", binary_stl("STL by esf", (1u << 31) + 1u, one));
+    EXPECT_THROW(esf::load_mesh(named_bin), esf::IoError);
+
+    const std::string short_file = write("short.stl", binary_stl("esf test", 1000, one));
+    EXPECT_EQ(error_of([&] { esf::load_mesh(short_file); }),
+              short_file +
+                  ": truncated binary STL: the header announces 1000 triangles, needing 50084 "
+                  "bytes, but the file has 134");
+}
+
 TEST_F(MeshTest, APlyMeshCutShortIsAnErrorWhereverItIsCut) {
     // A 6 x 6 vertex grid, 50 triangles, binary (written by esf) and ASCII. Cut at 30 % to 99 %
     // of its length, Assimp aborted (30-60 %) or returned a part of the mesh (75-99 %).

@@ -108,7 +108,8 @@ Scene three_object_scene(std::vector<Expected>& expected) {
     add_box(scene, 0.2f, 0.1f, 0.0f, 0.10f, 0.06f, 0.15f, 0.5f, 0);  // 2271 points
     add_cylinder(scene, -0.2f, 0.0f, 0.04f, 0.12f, 1);
     add_box(scene, 0.0f, -0.25f, 0.0f, 0.08f, 0.08f, 0.05f, 0.0f, 2);
-    expected.assign(3, {});
+    // Eigen leaves a default-constructed vector uninitialised ({} too): start the sums at zero.
+    expected.assign(3, {Vector3f::Zero(), Vector3f::Zero()});
     std::vector<int> counts(3, 0);
     for (std::size_t i = 0; i < scene.points.size(); ++i) {
         const int id = scene.owner[i];
