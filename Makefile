@@ -77,6 +77,8 @@ FUZZ_BUILD ?= build-fuzz
 FUZZ_CC ?= clang-16
 FUZZ_CXX ?= clang++-16
 FUZZ_SECONDS ?= 60
+# libFuzzer's random seed: fixed, so that a run is repeatable (set another to explore further).
+FUZZ_SEED ?= 1
 FUZZ_TARGETS := pcd ply_cloud xyz depth_png test_set catalog scene_set database mesh
 FUZZ_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
 fuzz:
@@ -93,7 +95,7 @@ fuzz:
 	@set -e; for t in $(FUZZ_TARGETS); do \
 		echo "== fuzz $$t ($(FUZZ_SECONDS) s)"; \
 		mkdir -p $(FUZZ_BUILD)/corpus/$$t; \
-		$(FUZZ_BUILD)/fuzz/$${t}_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
+		$(FUZZ_BUILD)/fuzz/$${t}_fuzz -seed=$(FUZZ_SEED) -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=2048 \
 			-print_final_stats=1 -artifact_prefix=$(FUZZ_BUILD)/artifacts/$$t- \
 			$(FUZZ_BUILD)/corpus/$$t $(FUZZ_BUILD)/seeds/$$t > $(FUZZ_BUILD)/$$t.log 2>&1 \
 			|| { tail -n 60 $(FUZZ_BUILD)/$$t.log; echo "esf: fuzz target $$t failed" >&2; exit 1; }; \

@@ -274,7 +274,9 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
             throw IoError(file_message(path, 0, reason.str()));
         }
     }
-    check_ply_lists(in, path, elements, binary, big_endian, static_cast<std::uint64_t>(available));
+    // A header cut before its last newline leaves `available` at -1: nothing follows it.
+    check_ply_lists(in, path, elements, binary, big_endian,
+                    static_cast<std::uint64_t>(std::max(0.0, available)));
 }
 
 // Assimp 5.2 allocates whatever an OFF header announces and clamps a face's out-of-range vertex

@@ -457,6 +457,15 @@ TEST_F(MeshTest, APlyMeshCutShortIsAnErrorWhereverItIsCut) {
     }
 }
 
+TEST_F(MeshTest, APlyHeaderCutBeforeItsLastNewlineIsAnError) {
+    // Found by the mesh fuzz target: nothing after the header, not even its newline (the bytes
+    // left after the header came out as -1).
+    for (const std::string header :
+         {"ply\nformat ascii 1.0\nend_header", "ply\nformat ascii 1.0\nelement x 0\nend_header",
+          "ply\nformat binary_little_endian 1.0\nend_header"})
+        EXPECT_THROW(esf::load_mesh(write("header_only.ply", header)), std::exception) << header;
+}
+
 TEST_F(MeshTest, NoFileOutsideTheModelsFolderIsOpened) {
     // A glTF whose buffer lies beside the model loads; the same buffer one folder up does not
     // exist for the importer (as /etc/passwd would not).
