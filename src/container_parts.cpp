@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "disjoint_sets.hpp"
 
@@ -61,7 +62,7 @@ Circle fit_circle(const CircleSums& sums) {
 }
 
 /// Sum of squared radial residuals of points to `c`.
-double radial_sum(const Circle& c, const std::vector<Eigen::Vector2d>& p) {
+double radial_sum(const Circle& c, std::span<const Eigen::Vector2d> p) {
     double sum = 0.0;
     for (const Eigen::Vector2d& q : p) {
         const double e = (q - c.centre).norm() - c.radius;
@@ -105,26 +106,50 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
     const auto planar = [&](const Eigen::Vector3f& p) -> Eigen::Vector2d {
         return Eigen::Vector2d(u.dot(p), w.dot(p)) - origin;
     };
-    std::vector<std::vector<Eigen::Vector2d>> footprint(count), rim(count);
+    // Each group's points contiguous (a counting sort by group): footprint(g) and rim(g) are
+    // ranges of two shared buffers, filled without an allocation per group.
+    std::vector<std::size_t> first(count + 1, 0);
+    for (const std::uint32_t g : component) ++first[g + 1];
+    for (std::uint32_t g = 0; g < count; ++g) first[g + 1] += first[g];
+    std::vector<Eigen::Vector2d> footprint_points(points.size());
+    std::vector<float> heights(points.size());
     std::vector<CircleSums> footprint_sums(count), rim_sums(count);
     std::vector<Box> footprint_box(count), rim_box(count);
     std::vector<float> top(count, -std::numeric_limits<float>::infinity());
-    for (std::size_t k = 0; k < points.size(); ++k) {
-        const std::uint32_t g = component[k];
-        footprint[g].push_back(planar(points[k]));
-        footprint_sums[g].add(footprint[g].back());
-        footprint_box[g].extend(footprint[g].back());
-        top[g] = std::max(top[g], up.dot(points[k]) + offset);
-    }
-    // The upper part of each group, where a container's walls are steep and its outline round.
-    for (std::size_t k = 0; k < points.size(); ++k) {
-        const std::uint32_t g = component[k];
-        if (up.dot(points[k]) + offset >= options.rim_band * top[g]) {
-            rim[g].push_back(planar(points[k]));
-            rim_sums[g].add(rim[g].back());
-            rim_box[g].extend(rim[g].back());
+    {
+        std::vector<std::size_t> next(first.begin(), first.end() - 1);
+        for (std::size_t k = 0; k < points.size(); ++k) {
+            const std::uint32_t g = component[k];
+            const std::size_t slot = next[g]++;
+            const Eigen::Vector2d q = planar(points[k]);
+            footprint_points[slot] = q;
+            heights[slot] = up.dot(points[k]) + offset;
+            footprint_sums[g].add(q);
+            footprint_box[g].extend(q);
+            top[g] = std::max(top[g], heights[slot]);
         }
     }
+    // The upper part of each group, where a container's walls are steep and its outline round.
+    std::vector<Eigen::Vector2d> rim_points;
+    rim_points.reserve(points.size());
+    std::vector<std::size_t> rim_first(count + 1, 0);
+    for (std::uint32_t g = 0; g < count; ++g) {
+        for (std::size_t i = first[g]; i < first[g + 1]; ++i)
+            if (heights[i] >= options.rim_band * top[g]) {
+                rim_points.push_back(footprint_points[i]);
+                rim_sums[g].add(footprint_points[i]);
+                rim_box[g].extend(footprint_points[i]);
+            }
+        rim_first[g + 1] = rim_points.size();
+    }
+    const auto footprint = [&](std::uint32_t g) {
+        return std::span<const Eigen::Vector2d>(footprint_points.data() + first[g],
+                                                first[g + 1] - first[g]);
+    };
+    const auto rim = [&](std::uint32_t g) {
+        return std::span<const Eigen::Vector2d>(rim_points.data() + rim_first[g],
+                                                rim_first[g + 1] - rim_first[g]);
+    };
     auto round = [&](const Circle& c) {
         return c.radius >= options.min_radius && c.radius <= options.max_radius &&
                c.rms <= options.max_residual * c.radius;
@@ -135,30 +160,30 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
     std::vector<std::uint32_t> large;
     std::vector<Circle> circles(count);
     for (std::uint32_t g = 0; g < count; ++g) {
-        if (footprint[g].size() < options.min_points) continue;
+        if (footprint(g).size() < options.min_points) continue;
         large.push_back(g);
         Circle& c = circles[g];
         c = fit_circle(footprint_sums[g]);
         if (plausible(c))
             c.rms =
-                std::sqrt(radial_sum(c, footprint[g]) / static_cast<double>(footprint[g].size()));
+                std::sqrt(radial_sum(c, footprint(g)) / static_cast<double>(footprint(g).size()));
     }
     DisjointSets sets(count);
     // Two parts of one round wall: the upper parts of both lie on one circle.
     for (std::size_t i = 0; i < large.size(); ++i)
         for (std::size_t j = i + 1; j < large.size(); ++j) {
             const std::uint32_t a = large[i], b = large[j];
-            if (rim[a].size() < options.min_points / 4 || rim[b].size() < options.min_points / 4)
+            if (rim(a).size() < options.min_points / 4 || rim(b).size() < options.min_points / 4)
                 continue;
             if (box_gap(rim_box[a], rim_box[b]) > options.max_shared_gap) continue;
             Circle c = fit_circle(rim_sums[a] + rim_sums[b]);
             if (!plausible(c) || c.radius > options.max_shared_radius) continue;
-            const double sum_a = radial_sum(c, rim[a]), sum_b = radial_sum(c, rim[b]);
-            c.rms = std::sqrt((sum_a + sum_b) / static_cast<double>(rim[a].size() + rim[b].size()));
+            const double sum_a = radial_sum(c, rim(a)), sum_b = radial_sum(c, rim(b));
+            c.rms = std::sqrt((sum_a + sum_b) / static_cast<double>(rim(a).size() + rim(b).size()));
             const double limit = options.max_shared_residual * c.radius;
             if (!round(c) || c.rms > limit) continue;
-            if (std::sqrt(sum_a / static_cast<double>(rim[a].size())) <= limit &&
-                std::sqrt(sum_b / static_cast<double>(rim[b].size())) <= limit)
+            if (std::sqrt(sum_a / static_cast<double>(rim(a).size())) <= limit &&
+                std::sqrt(sum_b / static_cast<double>(rim(b).size())) <= limit)
                 sets.unite(a, b);
         }
     for (const std::uint32_t outer : large) {
@@ -174,10 +199,10 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
             if (inner == outer || top[inner] > top[outer] + options.margin) continue;
             if (box_gap(disc, footprint_box[inner]) > 0.0) continue;
             std::size_t inside = 0;
-            for (const Eigen::Vector2d& q : footprint[inner])
+            for (const Eigen::Vector2d& q : footprint(inner))
                 inside += (q - c.centre).squaredNorm() <= reach * reach;
             if (static_cast<double>(inside) >= static_cast<double>(options.min_inside) *
-                                                   static_cast<double>(footprint[inner].size()))
+                                                   static_cast<double>(footprint(inner).size()))
                 sets.unite(outer, inner);
         }
     }

@@ -22,9 +22,11 @@ constexpr double kMaxLaneWeight = 65535.0;    // integer lane weights: 16 bits
 constexpr std::size_t kSampleRows = 4096;     // rows sampled to cut the first candidates
 constexpr std::size_t kMaxSketchBytes = std::size_t{1} << 27;  // 2^27 * 255 * 65535 < 2^52
 constexpr std::size_t kBuildBlock = 1024;                      // rows per build work item
-constexpr double kBoundShrink = 1.0 - 1e-9;  // relative slack taken off the sketch distance
-constexpr double kErrorGrow = 1.0 + 1e-9;    // relative slack added to quantisation errors
-constexpr double kMagnitudeSlack = 1e-12;    // absolute slack per unit of magnitude
+constexpr double kBoundShrink = 1.0 - 1e-9;          // relative slack taken off the sketch distance
+constexpr std::size_t kBoundBlockBytes = 24 * 1024;  // sketch rows per block of lower_bounds()
+constexpr std::size_t kBoundGroup = 8;     // queries of search_batch() per pass over the sketches
+constexpr double kErrorGrow = 1.0 + 1e-9;  // relative slack added to quantisation errors
+constexpr double kMagnitudeSlack = 1e-12;  // absolute slack per unit of magnitude
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string describe_value(float v) {
@@ -329,13 +331,38 @@ KnnResult KnnIndex::search(std::span<const float> query, std::size_t k) const {
     return search_checked(query, k);
 }
 
-KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) const {
+void KnnIndex::lower_bounds(std::span<const float> queries, double* bounds) const {
     const detail::KnnKernels kernels = detail::knn_kernels(kernel_);
+    const std::size_t count = queries.size() / dimension_;
     std::vector<double> values(stride_);
-    std::vector<std::uint8_t> codes(stride_);
-    const double magnitude =
-        sketch_values(query.data(), weights_.data(), dimension_, group_, values);
-    const double query_error = quantise_sketch(values, magnitude, codes.data());
+    std::vector<std::uint8_t> codes(count * stride_);
+    std::vector<double> query_error(count);
+    for (std::size_t q = 0; q < count; ++q) {
+        const double magnitude = sketch_values(queries.data() + q * dimension_, weights_.data(),
+                                               dimension_, group_, values);
+        query_error[q] = quantise_sketch(values, magnitude, codes.data() + q * stride_);
+    }
+    // Rows in blocks that stay in the first-level cache while every query passes over them:
+    // the sketches are read from memory once per batch instead of once per query.
+    const std::size_t block = std::max<std::size_t>(8, kBoundBlockBytes / stride_ / 8 * 8);
+    for (std::size_t r = 0; r < rows_; r += block) {
+        const std::size_t n = std::min(block, rows_ - r);
+        for (std::size_t q = 0; q < count; ++q)
+            kernels.sketch(sketch_.data() + r * stride_, n, stride_, codes.data() + q * stride_,
+                           lane_weight_.data(), sketch_unit_, row_error_.data() + r, query_error[q],
+                           bounds + q * rows_ + r);
+    }
+}
+
+KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) const {
+    const auto bound = std::make_unique_for_overwrite<double[]>(rows_);  // written in full
+    lower_bounds(query, bound.get());
+    return search_bounded(query, k, bound.get());
+}
+
+KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
+                                   double* bound) const {
+    const detail::KnnKernels kernels = detail::knn_kernels(kernel_);
 
     // Optimal multi-step search (Seidl & Kriegel): lower bounds of all rows (see the header);
     // exact distances for the rows with the smallest bounds, which sets the k-th distance;
@@ -348,8 +375,8 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
     using Candidate = std::pair<double, std::uint32_t>;  // (lower bound, row)
     const auto refine = [&](std::vector<Candidate>& candidates) {
         std::sort(candidates.begin(), candidates.end());
-        for (const auto& [bound, row] : candidates) {
-            if (bound > top.threshold()) break;
+        for (const auto& [row_bound, row] : candidates) {
+            if (row_bound > top.threshold()) break;
             const std::uint32_t view = view_of(row);
             top.offer(family_of(view), view, row,
                       kernels.exact(query.data(), data_.data() + row * dimension_, weights_.data(),
@@ -358,9 +385,6 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
         }
     };
 
-    const auto bound = std::make_unique_for_overwrite<double[]>(rows_);  // written in full
-    kernels.sketch(sketch_.data(), rows_, stride_, codes.data(), lane_weight_.data(), sketch_unit_,
-                   row_error_.data(), query_error, bound.get());
     const auto rows_below = [&](double limit, std::vector<Candidate>& out) {
         for (std::size_t r = 0; r < rows_; ++r)
             if (bound[r] <= limit) out.emplace_back(bound[r], static_cast<std::uint32_t>(r));
@@ -440,9 +464,20 @@ std::vector<KnnResult> KnnIndex::search_batch(std::span<const float> queries, st
     const std::size_t count = queries.size() / dimension_;
     for (std::size_t q = 0; q < count; ++q)
         check_query(queries.subspan(q * dimension_, dimension_), "query " + std::to_string(q));
+    // Queries in groups of up to kBoundGroup share one pass over the sketches (lower_bounds), as
+    // many groups as threads when there are fewer queries than that.
+    const std::size_t workers = static_cast<std::size_t>(resolve_threads(threads));
+    const std::size_t groups =
+        std::min(count, std::max((count + kBoundGroup - 1) / kBoundGroup, workers));
     std::vector<KnnResult> results(count);
-    parallel_for(count, threads, [&](std::size_t q) {
-        results[q] = search_checked(queries.subspan(q * dimension_, dimension_), k);
+    parallel_for(groups, threads, [&](std::size_t g) {
+        const std::size_t begin = g * count / groups;
+        const std::size_t end = (g + 1) * count / groups;
+        const auto bounds = std::make_unique_for_overwrite<double[]>((end - begin) * rows_);
+        lower_bounds(queries.subspan(begin * dimension_, (end - begin) * dimension_), bounds.get());
+        for (std::size_t q = begin; q < end; ++q)
+            results[q] = search_bounded(queries.subspan(q * dimension_, dimension_), k,
+                                        bounds.get() + (q - begin) * rows_);
     });
     return results;
 }

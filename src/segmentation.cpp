@@ -112,6 +112,7 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
         Part& part = parts[c];
         std::uint32_t row = std::numeric_limits<std::uint32_t>::max();
         std::uint32_t first = 0, last = 0;
+        std::size_t row_end = 0;  // first index after `row`
         auto close_row = [&] {
             if (row == std::numeric_limits<std::uint32_t>::max()) return;
             part.outside.emplace_back(u.dot(points[first]), w.dot(points[first]));
@@ -124,10 +125,10 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
             if (std::abs(h) <= options.plane_distance) {
                 ++part.table_points;
                 if (organised) {
-                    const std::uint32_t r = finite[k] / width;
-                    if (r != row) {
+                    if (finite[k] >= row_end) {  // a new row (indices ascend): divide only here
                         close_row();
-                        row = r;
+                        row = finite[k] / width;
+                        row_end = (static_cast<std::size_t>(row) + 1) * width;
                         first = finite[k];
                     }
                     last = finite[k];

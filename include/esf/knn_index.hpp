@@ -168,6 +168,11 @@ class KnnIndex {
     double quantise_sketch(std::span<const double> values, double magnitude,
                            std::uint8_t* codes) const;
     KnnResult search_checked(std::span<const float> query, std::size_t k) const;
+    /// Lower bounds of every row's distance to each of queries.size() / dimension() queries:
+    /// bounds[q * rows() + r].
+    void lower_bounds(std::span<const float> queries, double* bounds) const;
+    /// The search of one query given its rows' lower bounds (overwritten as it goes).
+    KnnResult search_bounded(std::span<const float> query, std::size_t k, double* bound) const;
 
     std::size_t dimension_ = 0;
     std::size_t rows_ = 0;
