@@ -26,27 +26,34 @@ mapfile -t files < <(find "$data/real" -name '*.pcd' -type f | sort | head -n "$
 cat "${files[@]}" > /dev/null
 
 # One process per file, ours and PCL's alternating (and swapping which goes first) so that both
-# meet the same machine load; $EPOCHREALTIME (bash 5) costs no process of its own.
-now_us() { local t=$EPOCHREALTIME; echo $((10#${t/./})); }
+# meet the same machine load. Times come from $EPOCHREALTIME (bash 5) read into variables: a
+# command substitution would fork a subshell, whose cost would be counted on both sides.
+us() { REPLY=$((10#${1/./})); }
 esf_us=0
 pcl_us=0
 for i in "${!files[@]}"; do
     f="${files[$i]}"
     for side in $((i % 2)) $((1 - i % 2)); do
-        t0=$(now_us)
+        t0=$EPOCHREALTIME
         if [[ $side == 0 ]]; then
             "$esf" describe --threads 1 "$f" > /dev/null
-            esf_us=$((esf_us + $(now_us) - t0))
+            t1=$EPOCHREALTIME
+            us "$t1"; end=$REPLY; us "$t0"
+            esf_us=$((esf_us + end - REPLY))
         else
             "$pcl" "$f" > /dev/null
-            pcl_us=$((pcl_us + $(now_us) - t0))
+            t1=$EPOCHREALTIME
+            us "$t1"; end=$REPLY; us "$t0"
+            pcl_us=$((pcl_us + end - REPLY))
         fi
     done
 done
 # The same files in one esf process: what is left without a process start per file.
-t0=$(now_us)
+t0=$EPOCHREALTIME
 "$esf" describe --threads 1 "${files[@]}" > /dev/null
-one_us=$(($(now_us) - t0))
+t1=$EPOCHREALTIME
+us "$t1"; end=$REPLY; us "$t0"
+one_us=$((end - REPLY))
 
 n=${#files[@]}
 printf 'files: %d (%s)\n' "$n" "$data/real"

@@ -315,14 +315,6 @@ void validate(const DescriptorOptions& options) {
             std::to_string(options.normal_radius_factor));
 }
 
-void check_name(const std::string& name) {
-    if (std::find(kNames.begin(), kNames.end(), name) == kNames.end()) {
-        std::string valid;
-        for (const char* n : kNames) valid += (valid.empty() ? "" : ", ") + std::string(n);
-        throw std::invalid_argument("unknown descriptor '" + name + "' (valid: " + valid + ")");
-    }
-}
-
 /// The PCL baselines, computed by the baselines module (baseline_descriptors.cpp).
 bool is_baseline(const std::string& name) {
     return name == "pcl-esf" || name == "vfh" || name == "cvfh" || name == "our-cvfh" ||
@@ -333,9 +325,16 @@ bool is_baseline(const std::string& name) {
 
 std::vector<std::string> descriptor_names() { return {kNames.begin(), kNames.end()}; }
 
+void check_descriptor_name(const std::string& name) {
+    if (std::find(kNames.begin(), kNames.end(), name) != kNames.end()) return;
+    std::string valid;
+    for (const char* n : kNames) valid += (valid.empty() ? "" : ", ") + std::string(n);
+    throw std::invalid_argument("unknown descriptor '" + name + "' (valid: " + valid + ")");
+}
+
 std::unique_ptr<GlobalDescriptor> make_descriptor(const std::string& name,
                                                   const DescriptorOptions& options) {
-    check_name(name);
+    check_descriptor_name(name);
     validate(options);
     if (name == "esf") return std::make_unique<EsfGlobal>(options);
     if (name == "esf-angles") return std::make_unique<EsfAnglesGlobal>(options);
@@ -352,22 +351,22 @@ std::unique_ptr<GlobalDescriptor> make_esf_descriptor(const EsfOptions& options)
 }
 
 void check_descriptor_options(const std::string& name, const DescriptorOptions& options) {
-    check_name(name);
+    check_descriptor_name(name);
     validate(options);
 }
 
 void require_descriptor(const std::string& name) {
-    check_name(name);
+    check_descriptor_name(name);
     if (is_baseline(name)) detail::baseline_module(name);
 }
 
 bool descriptor_available(const std::string& name) {
-    check_name(name);
+    check_descriptor_name(name);
     return !is_baseline(name) || detail::baseline_module_available();
 }
 
 DescriptorInfo descriptor_info(const std::string& name) {
-    check_name(name);
+    check_descriptor_name(name);
     return registered_info(name);
 }
 

@@ -48,15 +48,6 @@ std::string text_setting(const Settings& settings, const std::string& key,
     throw std::invalid_argument("setting " + key + " = " + to_string(*value) + " is not text");
 }
 
-void check_name(const std::string& name) {
-    const std::vector<std::string> names = descriptor_names();
-    if (std::find(names.begin(), names.end(), name) != names.end()) return;
-    std::string known;
-    for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-    throw std::invalid_argument("unknown descriptor '" + name + "' (this build knows " + known +
-                                ")");
-}
-
 }  // namespace
 
 std::uint64_t stored_seed(const Settings& settings) {
@@ -105,10 +96,9 @@ Settings descriptor_settings(const DescriptorSetup& setup) {
 }
 
 DescriptorSetup read_descriptor_setup(const Settings& settings, const DescriptorKind& kind) {
-    check_name(kind.name);
+    const int version = stored_descriptor_version(kind.name);  // throws for an unknown name
     DescriptorSetup setup;
     setup.name = kind.name;
-    const int version = stored_descriptor_version(kind.name);
     if (kind.version != version)
         throw std::invalid_argument("descriptor " + kind.name + " version " +
                                     std::to_string(kind.version) +

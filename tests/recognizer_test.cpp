@@ -381,7 +381,7 @@ TEST(RecognizerErrors, OtherDescriptorVersionOrUnknownDescriptor) {
     const std::string unknown = (dir / "unknown.sqlite").string();
     write_random_database(unknown, {"spin_image", 1, 153}, {}, 2, 3);
     message = MESSAGE_OF(std::invalid_argument, esf::Recognizer{unknown});
-    EXPECT_CONTAINS(message, unknown + ": unknown descriptor 'spin_image' (this build knows esf");
+    EXPECT_CONTAINS(message, unknown + ": unknown descriptor 'spin_image' (valid: esf");
 
     const std::string settings = (dir / "settings.sqlite").string();
     write_random_database(settings, kEsfKind,

@@ -69,11 +69,10 @@ std::vector<std::string> checked_names(const std::vector<std::string>& requested
     }
     std::vector<std::string> out;
     for (const auto& name : requested) {
-        if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
-            std::string list;
-            for (const auto& n : valid) list += (list.empty() ? "" : ", ") + n;
-            throw CLI::ValidationError("--descriptors",
-                                       "unknown descriptor '" + name + "' (valid: " + list + ")");
+        try {
+            check_descriptor_name(name);
+        } catch (const std::invalid_argument& e) {
+            throw CLI::ValidationError("--descriptors", e.what());
         }
         require_descriptor(name);
         if (std::find(out.begin(), out.end(), name) == out.end()) out.push_back(name);

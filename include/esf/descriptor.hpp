@@ -158,6 +158,10 @@ std::unique_ptr<GlobalDescriptor> make_esf_descriptor(const EsfOptions& options)
 /// The registered names, in the order of the table above.
 std::vector<std::string> descriptor_names();
 
+/// Throws std::invalid_argument "unknown descriptor 'NAME' (valid: ...)" unless `name` is one of
+/// descriptor_names(): the one check of a name, wherever it comes from (an option, a database).
+void check_descriptor_name(const std::string& name);
+
 /// Checks what make_descriptor(name, options) checks before computing anything: the name and
 /// the options' ranges. Throws std::invalid_argument like make_descriptor. Needs no module.
 void check_descriptor_options(const std::string& name, const DescriptorOptions& options);
