@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "disjoint_sets.hpp"
+#include "pixel_rows.hpp"
 
 namespace esf::detail {
 
@@ -29,11 +30,13 @@ void join_occluded_parts(std::span<const Eigen::Vector3f> points, std::uint32_t 
     const std::uint32_t count = *std::max_element(component.begin(), component.end()) + 1;
     std::vector<Group> groups(count);
     std::vector<std::uint32_t> group_at(static_cast<std::size_t>(width) * height, kNone);
+    PixelRows rows(width);
     for (std::size_t k = 0; k < candidates.size(); ++k) {
         Group& g = groups[component[k]];
         ++g.points;
-        g.u += candidates[k] % width;
-        g.v += candidates[k] / width;
+        rows.seek(candidates[k]);
+        g.u += rows.col();
+        g.v += rows.row();
         g.top = std::max(g.top, up.dot(points[candidates[k]]) + offset);
         group_at[candidates[k]] = component[k];
     }

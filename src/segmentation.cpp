@@ -15,6 +15,7 @@
 #include "esf/parallel.hpp"
 #include "euclidean_clusters.hpp"
 #include "occluded_parts.hpp"
+#include "pixel_rows.hpp"
 #include "plane_fit.hpp"
 
 namespace esf {
@@ -279,8 +280,10 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
 
         std::string why;
         if (organised) {
+            detail::PixelRows rows(width);
             for (const std::uint32_t i : cluster.indices) {
-                const std::uint32_t row = i / width, col = i % width;
+                rows.seek(i);
+                const std::uint32_t row = rows.row(), col = rows.col();
                 if (row < kBorderMargin || col < kBorderMargin || row + kBorderMargin >= height ||
                     col + kBorderMargin >= width) {
                     why = "touches the image border";

@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "disjoint_sets.hpp"
+#include "pixel_rows.hpp"
 
 namespace esf {
 
@@ -141,16 +142,21 @@ PatchGraph image_patches(std::span<const Eigen::Vector3f> points, std::uint32_t 
     };
     const std::uint32_t tile = options.tile_pixels;
 
-    // Patches: depth-continuous pixels of one tile.
+    // Patches: depth-continuous pixels of one tile. Whether a column or row is a tile's last.
+    std::vector<std::uint8_t> last_col(width), last_row(height);
+    for (std::uint32_t c = 0; c < width; ++c) last_col[c] = (c + 1) % tile == 0;
+    for (std::uint32_t r = 0; r < height; ++r) last_row[r] = (r + 1) % tile == 0;
     DisjointSets sets(members.size());
+    detail::PixelRows rows(width);
     for (std::uint32_t m = 0; m < members.size(); ++m) {
         const std::uint32_t pixel = members[m];
-        const std::uint32_t row = pixel / width, col = pixel % width;
-        if (col + 1 < width && (col + 1) % tile != 0) {
+        rows.seek(pixel);
+        const std::uint32_t row = rows.row(), col = rows.col();
+        if (col + 1 < width && !last_col[col]) {
             const std::uint32_t right = member_at[pixel + 1];
             if (right != kNone && continuous(m, right)) sets.unite(m, right);
         }
-        if (row + 1 < height && (row + 1) % tile != 0) {
+        if (row + 1 < height && !last_row[row]) {
             const std::uint32_t down = member_at[pixel + width];
             if (down != kNone && continuous(m, down)) sets.unite(m, down);
         }
@@ -161,7 +167,8 @@ PatchGraph image_patches(std::span<const Eigen::Vector3f> points, std::uint32_t 
     std::vector<std::uint64_t> pairs;
     for (std::uint32_t m = 0; m < members.size(); ++m) {
         const std::uint32_t pixel = members[m];
-        const std::uint32_t row = pixel / width, col = pixel % width;
+        rows.seek(pixel);
+        const std::uint32_t row = rows.row(), col = rows.col();
         const std::uint32_t neighbours[2] = {col + 1 < width ? member_at[pixel + 1] : kNone,
                                              row + 1 < height ? member_at[pixel + width] : kNone};
         for (const std::uint32_t n : neighbours)
