@@ -54,6 +54,26 @@ EsfSampler parse_esf_sampler(const std::string& name) {
 
 const char* to_string(EsfSampler sampler) { return sampler == EsfSampler::kPcl ? "pcl" : "fast"; }
 
+EsfKernels parse_esf_kernels(const std::string& name) {
+    if (name == "best") return EsfKernels::kBest;
+    if (name == "avx2") return EsfKernels::kAvx2;
+    if (name == "portable") return EsfKernels::kPortable;
+    throw std::invalid_argument("unknown ESF kernels '" + name +
+                                "' (expected best, avx2 or portable)");
+}
+
+const char* to_string(EsfKernels kernels) {
+    switch (kernels) {
+        case EsfKernels::kBest:
+            return "best";
+        case EsfKernels::kAvx2:
+            return "avx2";
+        case EsfKernels::kPortable:
+            return "portable";
+    }
+    return "unknown";
+}
+
 EsfEstimator::EsfEstimator(const EsfOptions& options)
     : options_(options), workspace_(std::make_unique<Workspace>()) {
     if (options.samples < 1 || options.samples > 10'000'000)
@@ -183,6 +203,18 @@ bool collinear(std::span<const Eigen::Vector3f> points) {
     throw std::invalid_argument(msg.str());
 }
 
+detail::TraceKernel trace_kernel(EsfKernels kernels) {
+    switch (kernels) {
+        case EsfKernels::kAvx2:
+            return detail::TraceKernel::kAvx2;
+        case EsfKernels::kPortable:
+            return detail::TraceKernel::kScalar;
+        case EsfKernels::kBest:
+            break;
+    }
+    return detail::TraceKernel::kBest;
+}
+
 }  // namespace
 
 EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
@@ -192,13 +224,14 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
 
     const int half = opt.grid_size / 2;
     const bool pcl = opt.sampler == EsfSampler::kPcl;
+    const bool avx512 = opt.kernels == EsfKernels::kBest;  // where the CPU has it
     // The fast sampler's centring pass reveals non-finite points for free; the pcl sampler
     // checks every point first.
     using detail::NormaliseOutcome;
     detail::Normalisation normalisation;
     NormaliseOutcome normalised = NormaliseOutcome::kNonFinite;
     if (!pcl && input.size() >= 3)
-        normalised = detail::normalise_points(input, half, opt.simd, normalisation);
+        normalised = detail::normalise_points(input, half, avx512, normalisation);
     FinitePoints finite;
     std::span<const Eigen::Vector3f> points = input;
     const bool all_finite =
@@ -211,7 +244,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         points = finite.points;
         result.dropped_points = finite.dropped;
         if (!pcl && points.size() >= 3)
-            normalised = detail::normalise_points(points, half, opt.simd, normalisation);
+            normalised = detail::normalise_points(points, half, avx512, normalisation);
     }
     result.points = points.size();
     if (points.size() < 3)
@@ -254,10 +287,10 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         // One pass: scaled point, its cell, the grid and the moments for the collinearity test
         // (the scaled points are centred, so raw moments lose nothing).
         const Eigen::Matrix3d covariance = detail::voxelise_points(
-            points, normalisation, half, opt.simd, ws.packed, ws.cells, ws.grid);
+            points, normalisation, half, avx512, ws.packed, ws.cells, ws.grid);
         if (collinear(covariance)) throw on_one_line();
     }
-    ws.grid.dilate(opt.grid_size, opt.simd);
+    ws.grid.dilate(opt.grid_size, avx512);
 
     // Random triples (Sec. III-C): `samples` accepted, degenerate ones redrawn.
     const auto samples = static_cast<std::size_t>(opt.samples);
@@ -287,7 +320,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     } else {
         const detail::SampleCount count =
             detail::sample_triangles_fast(ws.packed.data(), static_cast<std::uint32_t>(n), opt.seed,
-                                          max_attempts, kMinHeronProduct, opt.simd, triangles);
+                                          max_attempts, kMinHeronProduct, avx512, triangles);
         accepted = count.accepted;
         attempts = count.attempts;
         if (accepted < samples) throw_degenerate(n, accepted, max_attempts);
@@ -302,14 +335,12 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     detail::trace_lines(ws.grid, std::span(triangles.line_start).first(lines),
                         std::span(triangles.line_end).first(lines),
                         std::span(ws.occupied).first(lines), std::span(ws.visited).first(lines),
-                        ws.trace,
-                        opt.simd ? detail::TraceKernel::kBest : detail::TraceKernel::kScalar,
-                        detail::LineEnds::kSetBeforeDilation);
+                        ws.trace, trace_kernel(opt.kernels), detail::LineEnds::kSetBeforeDilation);
 
     // Histograms, counted in integers: every value the reference accumulates in float is a
     // multiple of 1/32 far below 2^24 / 32, so integer sums converted at the end are identical.
-    const detail::EsfCounts h = detail::histogram_triangles(triangles, ws.occupied.data(),
-                                                            ws.visited.data(), pcl, opt.simd);
+    const detail::EsfCounts h =
+        detail::histogram_triangles(triangles, ws.occupied.data(), ws.visited.data(), pcl, avx512);
     constexpr int kA3Mixed = 2;
 
     // Block weights of the reference, then L1 normalisation (float, in output order).

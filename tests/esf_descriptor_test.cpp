@@ -133,13 +133,28 @@ TEST(EsfDescriptor, PoolGivesTheEstimatorsResultFromConcurrentCallers) {
 TEST(EsfDescriptor, PortableCodeGivesTheSimdKernelsOutput) {
     const auto points = partial_cylinder(5000);
     for (std::uint64_t seed : {0u, 1u, 99u}) {
-        esf::EsfOptions simd;
-        simd.seed = seed;
-        esf::EsfOptions portable = simd;
-        portable.simd = false;
-        const auto a = esf::compute_esf(points, simd), b = esf::compute_esf(points, portable);
-        EXPECT_EQ(a.descriptor, b.descriptor) << "seed " << seed;
-        EXPECT_EQ(a.attempts, b.attempts) << "seed " << seed;
+        esf::EsfOptions best;
+        best.seed = seed;
+        const auto a = esf::compute_esf(points, best);
+        for (const esf::EsfKernels kernels : {esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
+            esf::EsfOptions other = best;
+            other.kernels = kernels;
+            const auto b = esf::compute_esf(points, other);
+            EXPECT_EQ(a.descriptor, b.descriptor) << "seed " << seed << " " << to_string(kernels);
+            EXPECT_EQ(a.attempts, b.attempts) << "seed " << seed << " " << to_string(kernels);
+        }
+    }
+}
+
+TEST(EsfDescriptor, KernelNamesRoundTrip) {
+    for (const esf::EsfKernels kernels :
+         {esf::EsfKernels::kBest, esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable})
+        EXPECT_EQ(esf::parse_esf_kernels(esf::to_string(kernels)), kernels);
+    try {
+        esf::parse_esf_kernels("sse");
+        FAIL() << "no exception";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_STREQ(e.what(), "unknown ESF kernels 'sse' (expected best, avx2 or portable)");
     }
 }
 

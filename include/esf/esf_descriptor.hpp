@@ -48,6 +48,20 @@ enum class EsfSampler {
 EsfSampler parse_esf_sampler(const std::string& name);
 const char* to_string(EsfSampler sampler);
 
+/// The code paths of the fast sampler. kBest takes what the CPU has, by its feature flags:
+/// AVX-512 (F, BW, VL, DQ) kernels for the per-point passes, sampling, tracing and histograms,
+/// the tracer counting cells with VPOPCNTDQ where present; without AVX-512 the AVX2 line tracer
+/// and portable code for the rest; portable code otherwise.
+enum class EsfKernels {
+    kBest,
+    kAvx2,      ///< at most AVX2: what a CPU without AVX-512 runs
+    kPortable,  ///< no SIMD kernels
+};
+
+/// Parses "best" / "avx2" / "portable"; throws std::invalid_argument naming the value otherwise.
+EsfKernels parse_esf_kernels(const std::string& name);
+const char* to_string(EsfKernels kernels);
+
 struct EsfOptions {
     int samples = 20000;  ///< accepted point triples (paper: 20,000)
     int grid_size = 64;   ///< voxel grid side, 8..64 (the `pcl` sampler needs 64)
@@ -56,9 +70,9 @@ struct EsfOptions {
     /// Attempts allowed per requested sample before the cloud is declared degenerate
     /// (PCL loops forever there). Rejections are rare on real clouds (< 1 %).
     int max_attempts_per_sample = 64;
-    /// Use the CPU's SIMD kernels (AVX-512, AVX2) where it has them. false runs the portable
-    /// code, which gives the same output bit for bit (for testing, or to rule the kernels out).
-    bool simd = true;
+    /// Which kernels run; each gives the same output bit for bit (for testing, for measuring
+    /// the path another CPU would take, or to rule the kernels out).
+    EsfKernels kernels = EsfKernels::kBest;
 };
 
 struct EsfResult {
