@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -37,6 +38,7 @@ struct EsfEstimator::Workspace {
     std::vector<std::uint16_t> occupied;
     std::vector<std::uint8_t> visited;
     detail::TraceScratch trace;
+    detail::TraceKernelTrials trials;  // EsfKernels::kBest: which tracer is fastest here
 };
 
 const std::array<const char*, kEsfBlocks>& esf_block_names() {
@@ -332,10 +334,17 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     const std::size_t lines = 3 * samples;
     ws.occupied.resize(lines + 16);  // + slack for full-width SIMD reads
     ws.visited.resize(lines + 16);
+    const bool trial = opt.kernels == EsfKernels::kBest && !ws.trials.decided();
+    const detail::TraceKernel kernel = trial ? ws.trials.next() : trace_kernel(opt.kernels);
+    const auto trace_start = std::chrono::steady_clock::now();
     detail::trace_lines(ws.grid, std::span(triangles.line_start).first(lines),
                         std::span(triangles.line_end).first(lines),
                         std::span(ws.occupied).first(lines), std::span(ws.visited).first(lines),
-                        ws.trace, trace_kernel(opt.kernels), detail::LineEnds::kSetBeforeDilation);
+                        ws.trace, kernel, detail::LineEnds::kSetBeforeDilation);
+    if (trial)
+        ws.trials.record(
+            kernel,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count());
 
     // Histograms, counted in integers: every value the reference accumulates in float is a
     // multiple of 1/32 far below 2^24 / 32, so integer sums converted at the end are identical.

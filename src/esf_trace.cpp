@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cstdlib>
+#include <limits>
 
 namespace esf::detail {
 
@@ -474,6 +475,31 @@ void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
             trace_lines_scalar(grid, starts, ends, occupied, visited);
             break;
     }
+}
+
+TraceKernelTrials::TraceKernelTrials() {
+    candidates_.push_back(TraceKernel::kBest);  // the widest
+    const Kernel widest = best_kernel();
+    if (widest == Kernel::kAvx512Popcnt) candidates_.push_back(TraceKernel::kAvx512);
+    if (widest == Kernel::kAvx512Popcnt || widest == Kernel::kAvx512)
+        candidates_.push_back(TraceKernel::kAvx2);
+    best_.assign(candidates_.size(), std::numeric_limits<double>::infinity());
+    decided_ = candidates_.size() == 1;
+}
+
+TraceKernel TraceKernelTrials::next() const {
+    return decided_ ? chosen_ : candidates_[calls_ % candidates_.size()];
+}
+
+void TraceKernelTrials::record(TraceKernel kernel, double seconds) {
+    if (decided_) return;
+    const auto k = static_cast<std::size_t>(
+        std::find(candidates_.begin(), candidates_.end(), kernel) - candidates_.begin());
+    if (k < best_.size()) best_[k] = std::min(best_[k], seconds);
+    if (++calls_ < kRounds * candidates_.size()) return;
+    chosen_ = candidates_[static_cast<std::size_t>(std::min_element(best_.begin(), best_.end()) -
+                                                   best_.begin())];
+    decided_ = true;
 }
 
 const char* trace_kernel_name() {

@@ -84,4 +84,30 @@ void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> st
 /// Name of the widest kernel this CPU runs ("avx512-popcnt", "avx512", "avx2" or "scalar").
 const char* trace_kernel_name();
 
+/// Picks the fastest tracing kernel on this CPU by timing the real work: an estimator's first
+/// calls try each SIMD kernel the CPU supports in turn (kRounds rounds, the widest first), and
+/// the one with the least time then traces every later call. Gathers, on which the AVX-512
+/// kernels lean, cost very differently across CPUs, so the widest kernel need not be the
+/// fastest. Every kernel gives the same counts: only the speed depends on the choice. Each
+/// estimator holds its own (no shared state).
+class TraceKernelTrials {
+  public:
+    static constexpr int kRounds = 3;
+
+    TraceKernelTrials();
+    /// Whether the choice is made (at once when the CPU offers one kernel).
+    bool decided() const { return decided_; }
+    /// The kernel for the next call: the next one to try, or the choice.
+    TraceKernel next() const;
+    /// Records how long `kernel` (the value next() gave) took.
+    void record(TraceKernel kernel, double seconds);
+
+  private:
+    std::vector<TraceKernel> candidates_;
+    std::vector<double> best_;
+    std::size_t calls_ = 0;
+    TraceKernel chosen_ = TraceKernel::kBest;
+    bool decided_ = false;
+};
+
 }  // namespace esf::detail

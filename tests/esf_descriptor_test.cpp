@@ -425,3 +425,28 @@ TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
 }
 
 }  // namespace
+
+TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
+    using esf::detail::TraceKernel;
+    esf::detail::TraceKernelTrials trials;
+    if (trials.decided()) {  // a CPU with one kernel: nothing to try
+        EXPECT_EQ(trials.next(), TraceKernel::kBest);
+        return;
+    }
+    std::vector<TraceKernel> tried;
+    while (!trials.decided() && tried.size() < 100) {
+        const TraceKernel kernel = trials.next();
+        tried.push_back(kernel);
+        // The AVX2 kernel is made the fastest after the first round (at most three kernels).
+        const bool later_round = tried.size() > 3;
+        trials.record(kernel, kernel == TraceKernel::kAvx2 && later_round ? 1.0 : 2.0);
+    }
+    ASSERT_TRUE(trials.decided());
+    const std::size_t kinds = tried.size() / esf::detail::TraceKernelTrials::kRounds;
+    ASSERT_EQ(tried.size(), kinds * esf::detail::TraceKernelTrials::kRounds);
+    EXPECT_EQ(tried.front(), TraceKernel::kBest);  // the widest first
+    for (std::size_t i = kinds; i < tried.size(); ++i) EXPECT_EQ(tried[i], tried[i - kinds]);
+    EXPECT_EQ(trials.next(), TraceKernel::kAvx2);
+    trials.record(TraceKernel::kAvx2, 100.0);  // the choice stays
+    EXPECT_EQ(trials.next(), TraceKernel::kAvx2);
+}
