@@ -39,7 +39,6 @@
 #include "baseline_descriptors.hpp"
 
 #include <dlfcn.h>
-#include <fcntl.h>
 #include <pcl/common/common.h>
 #include <pcl/features/cvfh.h>
 #include <pcl/features/esf.h>
@@ -53,12 +52,9 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/search/kdtree.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <iterator>
@@ -69,6 +65,7 @@
 #include <vector>
 
 #include "baseline_child.hpp"
+#include "child_process.hpp"
 #include "esf/esf_descriptor.hpp"
 
 namespace esf::detail {
@@ -346,64 +343,18 @@ std::vector<Signature> describe_in_child(const Points& points, const DescriptorO
     if (::access(helper.c_str(), X_OK) != 0)
         throw std::runtime_error(name + ": its helper " + helper +
                                  " is missing (install the baselines component)");
-    int in[2], out[2];
-    if (::pipe2(in, O_CLOEXEC) != 0) throw std::runtime_error(name + ": pipe() failed");
-    if (::pipe2(out, O_CLOEXEC) != 0) {
-        ::close(in[0]);
-        ::close(in[1]);
-        throw std::runtime_error(name + ": pipe() failed");
+    ChildResult result;
+    try {
+        result = run_child(helper, {}, encode_child_request(points, options), ChildLimits{});
+    } catch (const std::runtime_error& e) {
+        throw std::runtime_error(name + ": " + e.what());
     }
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
-    posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
-    // PCL's warnings and its assertion message stay with the child: the failure is reported.
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-    char* argv[] = {const_cast<char*>(helper.c_str()), nullptr};
-    char* envp[] = {nullptr};
-    pid_t pid = 0;
-    const int spawned = ::posix_spawn(&pid, helper.c_str(), &actions, nullptr, argv, envp);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(in[0]);
-    ::close(out[1]);
-    if (spawned != 0) {
-        ::close(in[1]);
-        ::close(out[0]);
-        throw std::runtime_error(name + ": cannot start " + helper + ": " + std::strerror(spawned));
-    }
-    // The child reads the whole request before it writes: send it all, then read the reply.
-    const std::string request = encode_child_request(points, options);
-    const char* at = request.data();
-    std::size_t left = request.size();
-    while (left > 0) {
-        const ssize_t n = ::write(in[1], at, left);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;  // the child died: its status says why
-        at += n;
-        left -= static_cast<std::size_t>(n);
-    }
-    ::close(in[1]);
-    std::vector<char> bytes;
-    char buffer[1 << 16];
-    for (;;) {
-        const ssize_t n = ::read(out[0], buffer, sizeof buffer);
-        if (n > 0) {
-            bytes.insert(bytes.end(), buffer, buffer + n);
-        } else if (n == 0 || errno != EINTR) {
-            break;
-        }
-    }
-    ::close(out[0]);
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    const std::string& bytes = result.reply;
     std::uint64_t header[3];
-    const bool exited = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    const bool exited = result.end == ChildResult::End::kExited && result.code == 0;
     if (!exited || bytes.size() < sizeof header)
         throw std::invalid_argument(name + ": PCL's OURCVFHEstimation failed on this cloud (" +
-                                    (WIFSIGNALED(status)
-                                         ? "signal " + std::to_string(WTERMSIG(status))
-                                         : "exit status " + std::to_string(WEXITSTATUS(status))) +
+                                    describe_end(result) +
                                     "; a smooth region without a reference frame)");
     std::memcpy(header, bytes.data(), sizeof header);
     const char* payload = bytes.data() + sizeof header;

@@ -3,13 +3,13 @@
 
 #include <dlfcn.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "baseline_descriptors.hpp"
+#include "installed_files.hpp"
 
 #ifndef ESF_BASELINES_BUILD_PATH
 #define ESF_BASELINES_BUILD_PATH ""
@@ -29,36 +29,10 @@ struct LoadedModule {
     std::string failure;  ///< why none loaded: each place tried and what happened
 };
 
-/// The directory of the binary (program or shared object) this code is linked into.
-std::filesystem::path own_directory() {
-    Dl_info info{};
-    if (dladdr(reinterpret_cast<void*>(&baseline_module_available), &info) == 0 ||
-        info.dli_fname == nullptr)
-        return {};
-    std::error_code error;
-    std::filesystem::path path = std::filesystem::canonical(info.dli_fname, error);
-    if (error) path = std::filesystem::canonical("/proc/self/exe", error);
-    return error ? std::filesystem::path{} : path.parent_path();
-}
-
-std::vector<std::string> candidates() {
-    std::vector<std::string> out;
-    if (const char* env = std::getenv("ESF_BASELINES"); env != nullptr && *env != '\0') {
-        out.emplace_back(env);
-        return out;  // an explicit choice is the only one tried
-    }
-    if (const std::filesystem::path dir = own_directory(); !dir.empty()) {
-        out.push_back((dir.parent_path() / "lib" / "esf" / kModuleFile).string());
-        out.push_back((dir / kModuleFile).string());
-    }
-    for (const char* fixed : {ESF_BASELINES_BUILD_PATH, ESF_BASELINES_INSTALL_PATH})
-        if (*fixed != '\0') out.emplace_back(fixed);
-    return out;
-}
-
 LoadedModule load() {
     LoadedModule loaded;
-    for (const std::string& path : candidates()) {
+    for (const std::string& path : installed_file_candidates(
+             "ESF_BASELINES", kModuleFile, ESF_BASELINES_BUILD_PATH, ESF_BASELINES_INSTALL_PATH)) {
         std::error_code error;
         if (!std::filesystem::is_regular_file(path, error)) {
             loaded.failure += (loaded.failure.empty() ? "" : "; ") + path + ": not found";

@@ -17,13 +17,16 @@ test -x "$work/prefix/bin/esf" || { echo "check_package: esf not installed" >&2;
 test -f "$work/prefix/lib/cmake/esf/esfConfigVersion.cmake" ||
     { echo "check_package: no esfConfigVersion.cmake" >&2; exit 1; }
 "$work/prefix/bin/esf" --version
+test -x "$work/prefix/lib/esf/esf_mesh_import" ||
+    { echo "check_package: the mesh importer esf_mesh_import is not installed" >&2; exit 1; }
 cmake -S "$source_dir/tests/package_consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_CXX_FLAGS="$cxx_flags" \
     -DCMAKE_EXE_LINKER_FLAGS="$linker_flags" \
     > "$work/configure.log" ||
     { cat "$work/configure.log" >&2; exit 1; }
 cmake --build "$work/consumer" > "$work/build.log" || { cat "$work/build.log" >&2; exit 1; }
-"$work/consumer/consumer" "$work"
+# The installed mesh importer, not the build tree's (which the library also knows).
+ESF_MESH_IMPORTER="$work/prefix/lib/esf/esf_mesh_import" "$work/consumer/consumer" "$work"
 # A version the package is not: find_package must fail.
 mkdir -p "$work/too_new"
 sed 's/find_package(esf 0.1 REQUIRED)/find_package(esf 9.0 REQUIRED)/' \

@@ -1,6 +1,7 @@
 #include "esf/mesh.hpp"
 
 #include <gtest/gtest.h>
+#include <stdlib.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 
 #include "error_of.hpp"
 #include "esf/error.hpp"
+#include "recursive_collada.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -537,6 +539,127 @@ TEST_F(MeshTest, WriteErrors) {
     EXPECT_FALSE(fs::exists(path));
 }
 
+// ---- the importer helper ---------------------------------------------------------------------
+
+TEST_F(MeshTest, AnImporterCrashIsAnErrorOfThatFileOnly) {
+    const std::string path = write("recursive.dae", esf::test::recursive_collada());
+    EXPECT_THROW(esf::load_mesh(path), esf::IoError);
+    // The helper's stack overflows (SIGSEGV; under AddressSanitizer, its report and exit status).
+    const std::string error = error_of([&] { esf::load_mesh(path); });
+    EXPECT_EQ(error.rfind(path + ": the mesh importer ", 0), 0u) << error;
+    // This process goes on loading meshes.
+    EXPECT_EQ(
+        esf::load_mesh(write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")).triangles.size(),
+        1u);
+}
+
+TEST_F(MeshTest, ImportLimitsAreReported) {
+    const std::string path = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    esf::MeshImportLimits limits;
+    EXPECT_EQ(limits.address_space_mib, esf::kMeshImportAddressSpaceMiB);
+    EXPECT_EQ(limits.seconds, esf::kMeshImportSeconds);
+    EXPECT_EQ(esf::load_mesh(path, limits).triangles.size(), 1u);
+    // A microsecond is over before the helper has started.
+    limits.seconds = 1e-6;
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path, limits); }),
+              path + ": the mesh importer took longer than 1e-06 s");
+    limits.seconds = 0.0;
+    EXPECT_THROW(esf::load_mesh(path, limits), std::invalid_argument);
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+#define ESF_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define ESF_TEST_ASAN 1
+#endif
+#endif
+
+TEST_F(MeshTest, TheImportersAddressSpaceIsLimited) {
+#if defined(ESF_TEST_ASAN)
+    GTEST_SKIP() << "the helper sets no address-space limit under AddressSanitizer";
+#else
+    // The helper's own code and libraries take more than 1 MiB: its first allocation fails.
+    const std::string path = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    esf::MeshImportLimits limits;
+    limits.address_space_mib = 1;
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path, limits); }),
+              path + ": the mesh importer needed more than 1 MiB");
+#endif
+}
+
+class MeshHelperTest : public MeshTest {
+  protected:
+    // A stand-in for the helper: a shell script, named by ESF_MESH_IMPORTER for this test only.
+    void use_helper(const std::string& script) {
+        helper_ = write("helper.sh", "#!/bin/sh\n" + script);
+        fs::permissions(helper_, fs::perms::owner_all);
+        ::setenv("ESF_MESH_IMPORTER", helper_.c_str(), 1);
+    }
+    void TearDown() override {
+        ::unsetenv("ESF_MESH_IMPORTER");
+        MeshTest::TearDown();
+    }
+    std::string helper_;
+};
+
+TEST_F(MeshHelperTest, AMissingHelperIsNamed) {
+    const std::string path = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const std::string missing = (dir_ / "no" / "esf_mesh_import").string();
+    ::setenv("ESF_MESH_IMPORTER", missing.c_str(), 1);
+    EXPECT_THROW(esf::load_mesh(path), esf::IoError);
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": cannot import meshes: its helper esf_mesh_import is missing (looked in " +
+                  missing + ")");
+    // Files that are no mesh are refused before the helper is looked for.
+    EXPECT_EQ(error_of([&] { esf::load_mesh((dir_ / "none.obj").string()); }),
+              (dir_ / "none.obj").string() + ": no such file");
+}
+
+TEST_F(MeshHelperTest, CrashesHangsAndBadRepliesOfTheHelperAreErrors) {
+    const std::string path = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    use_helper("kill -SEGV $$\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer crashed (signal 11)");
+    use_helper("kill -ABRT $$\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer crashed (signal 6)");
+    use_helper("exit 4\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer needed more than 4096 MiB");
+    use_helper("exit 7\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer failed (exit status 7)");
+    use_helper("exec /bin/sleep 30\n");
+    esf::MeshImportLimits limits;
+    limits.seconds = 0.3;
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path, limits); }),
+              path + ": the mesh importer took longer than 0.3 s");
+    use_helper("printf 'short'\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer's reply is malformed (5 bytes)");
+    // A header announcing 2^40 vertices in no bytes: refused before anything is allocated.
+    std::string lie(24, '\0');
+    lie[8 + 5] = 1;
+    write("lie.bin", lie);
+    use_helper("exec /bin/cat " + (dir_ / "lie.bin").string() + "\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path +
+                  ": the mesh importer's reply is malformed (1099511627776 vertices and 0 "
+                  "triangles in 0 bytes)");
+    // A triangle naming a vertex that is not there.
+    std::string bad(24 + 12, '\0');
+    bad[16] = 1;  // 0 vertices, 1 triangle
+    write("bad.bin", bad);
+    use_helper("exec /bin/cat " + (dir_ / "bad.bin").string() + "\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer's reply is malformed (triangle 0 names vertex 0)");
+    // A helper that exits without reading or writing anything.
+    use_helper("exit 0\n");
+    EXPECT_EQ(error_of([&] { esf::load_mesh(path); }),
+              path + ": the mesh importer's reply is malformed (0 bytes)");
+}
+
 TEST(MeshRealData, YcbPlyAndKitObj) {
     ESF_REQUIRE_DATA("meshes/apple/ycb_013_apple.ply");
     ESF_REQUIRE_DATA("meshes/bottle/kit_BathDetergent.obj");
@@ -555,6 +678,13 @@ TEST(MeshRealData, YcbPlyAndKitObj) {
     Eigen::Vector3f kit_size = kit.max_corner() - kit.min_corner();
     std::sort(kit_size.data(), kit_size.data() + 3);
     EXPECT_NEAR(kit_size[1], 0.045f, 0.01f);
+}
+
+TEST(MeshRealData, TheLargestMeshesLoadWithinTheDefaultLimits) {
+    ESF_REQUIRE_DATA("meshes/cup/ycb_065-d_cups.ply");
+    const esf::Mesh cup =
+        esf::load_mesh(esf::test::data_file("meshes/cup/ycb_065-d_cups.ply").string());
+    EXPECT_GT(cup.triangles.size(), 10000u);
 }
 
 }  // namespace

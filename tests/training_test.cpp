@@ -19,6 +19,7 @@
 #include "esf/descriptor.hpp"
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
+#include "recursive_collada.hpp"
 #include "require_baselines.hpp"
 
 namespace esf {
@@ -726,6 +727,22 @@ TEST_F(TrainingRunTest, BrokenMeshesAreStoredAsFailedAndRetried) {
     EXPECT_EQ(again.models_trained, 1u);
     EXPECT_EQ(db.model_status("box", "broken"), ModelStatus::kComplete);
     EXPECT_EQ(db.summary().failed_models, 0u);
+}
+
+TEST_F(TrainingRunTest, AMeshThatCrashesTheImporterFailsAloneAndTrainingGoesOn) {
+    touch("root/box/recursive.dae", test::recursive_collada());
+    Database db(path("db.sqlite"), OpenMode::kWrite);
+    const TrainingResult r = train(root(), db, fast_options());
+    EXPECT_EQ(r.models_total, 5u);
+    EXPECT_EQ(r.models_trained, 4u);
+    EXPECT_EQ(r.models_failed, 1u);
+    ASSERT_EQ(r.failures.size(), 1u);
+    EXPECT_EQ(r.failures[0].model, "box/recursive");
+    EXPECT_EQ(r.failures[0].error.rfind(path("root/box/recursive.dae") + ": the mesh importer ", 0),
+              0u)
+        << r.failures[0].error;
+    EXPECT_EQ(db.model_status("box", "recursive"), ModelStatus::kFailed);
+    EXPECT_EQ(db.model_status("box", "cube"), ModelStatus::kComplete);
 }
 
 TEST_F(TrainingRunTest, SymbolicLinkLoopsAreReportedAndTrainingGoesOn) {

@@ -1,5 +1,6 @@
 // Uses the installed esf: describes a generated cloud, writes and reads it back, and checks
-// that the descriptor is a 640-bin histogram summing to 1 and the same after the round trip.
+// that the descriptor is a 640-bin histogram summing to 1 and the same after the round trip;
+// writes a mesh and loads it back (through the installed mesh importer helper).
 
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include "esf/cloud_io.hpp"
 #include "esf/descriptor.hpp"
 #include "esf/esf_descriptor.hpp"
+#include "esf/mesh.hpp"
 
 int main(int argc, char** argv) {
     try {
@@ -32,6 +34,17 @@ int main(int argc, char** argv) {
         for (const float v : a.descriptor) sum += v;
         if (a.descriptor != b.descriptor || std::abs(sum - 1.0) > 1e-4) {
             std::fprintf(stderr, "consumer: unexpected descriptor (sum %f)\n", sum);
+            return 1;
+        }
+        esf::Mesh mesh;
+        mesh.vertices = {{0.0f, 0.0f, 0.0f}, {0.1f, 0.0f, 0.0f}, {0.0f, 0.1f, 0.0f}};
+        mesh.triangles = {{0, 1, 2}};
+        const std::string mesh_path =
+            (std::filesystem::path(argc > 1 ? argv[1] : ".") / "consumer_mesh.ply").string();
+        esf::write_ply_mesh(mesh_path, mesh);
+        const esf::Mesh loaded = esf::load_mesh(mesh_path);
+        if (loaded.vertices != mesh.vertices || loaded.triangles != mesh.triangles) {
+            std::fprintf(stderr, "consumer: the mesh read back differs\n");
             return 1;
         }
         std::printf("consumer: esf descriptor of %zu points, sum %.6f; %zu descriptors known\n",
