@@ -4,23 +4,26 @@
 # loadPCDFile + ESFEstimation). Each process reads its file, describes it and prints one CSV
 # line, so start-up, reading and describing all count. Ends with "ratio: X" = PCL time / esf time.
 #
-# usage: bench/cloud_io_batch.sh [BUILD_DIR] [MAX_FILES]   (defaults: build, 200)
-# The clouds are $ESF_DATA/real/**/*.pcd (ESF_DATA defaults to ../shared/data beside the repository).
+# usage: bench/cloud_io_batch.sh [BUILD_DIR] [MAX_FILES] [SUBDIR]   (defaults: build, 200, real)
+# The clouds are $ESF_DATA/SUBDIR/**/*.pcd (ESF_DATA defaults to ../shared/data beside the
+# repository); SUBDIR real/objects takes the segmented object views only, real/scenes the
+# 640 x 480 scenes.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$root/build}"
 max_files="${2:-200}"
+subdir="${3:-real}"
 data="${ESF_DATA:-$root/../shared/data}"
 esf="$build/apps/esf/esf"
 pcl="$build/bench/pcl_esf_describe"
 for tool in "$esf" "$pcl"; do
     [[ -x "$tool" ]] || { echo "cloud_io_batch: missing $tool (cmake --build $build)" >&2; exit 1; }
 done
-[[ -d "$data/real" ]] || { echo "cloud_io_batch: no $data/real (set ESF_DATA)" >&2; exit 1; }
+[[ -d "$data/$subdir" ]] || { echo "cloud_io_batch: no $data/$subdir (set ESF_DATA)" >&2; exit 1; }
 
-mapfile -t files < <(find "$data/real" -name '*.pcd' -type f | sort | head -n "$max_files")
-[[ ${#files[@]} -gt 0 ]] || { echo "cloud_io_batch: no .pcd files under $data/real" >&2; exit 1; }
+mapfile -t files < <(find "$data/$subdir" -name '*.pcd' -type f | sort | head -n "$max_files")
+[[ ${#files[@]} -gt 0 ]] || { echo "cloud_io_batch: no .pcd files under $data/$subdir" >&2; exit 1; }
 
 # Warm the page cache so that both sides read from memory.
 cat "${files[@]}" > /dev/null
@@ -56,7 +59,7 @@ us "$t1"; end=$REPLY; us "$t0"
 one_us=$((end - REPLY))
 
 n=${#files[@]}
-printf 'files: %d (%s)\n' "$n" "$data/real"
+printf 'files: %d (%s)\n' "$n" "$data/$subdir"
 awk -v n="$n" -v e="$esf_us" -v p="$pcl_us" -v o="$one_us" 'BEGIN {
     e /= 1e6; p /= 1e6; o /= 1e6
     printf "esf describe --threads 1 FILE, one process per file: %.2f s, %.1f files/s\n", e, n / e
