@@ -11,21 +11,7 @@
 #include <iterator>
 #include <string>
 
-namespace {
-
-bool write_all(const std::string& bytes) {
-    const char* at = bytes.data();
-    std::size_t left = bytes.size();
-    while (left > 0) {
-        const ssize_t n = ::write(STDOUT_FILENO, at, left);
-        if (n <= 0) return false;
-        at += n;
-        left -= static_cast<std::size_t>(n);
-    }
-    return true;
-}
-
-}  // namespace
+#include "child_process.hpp"
 
 #if defined(__SANITIZE_ADDRESS__)
 // make sanitize: inside libpcl_features (not instrumented), OURCVFHEstimation's
@@ -58,5 +44,5 @@ int main() {
     } catch (const std::exception& e) {
         reply = esf::detail::encode_child_error(e.what());
     }
-    return write_all(reply) ? 0 : 3;
+    return esf::detail::write_reply(reply) ? 0 : 3;
 }

@@ -244,4 +244,17 @@ std::string describe_end(const ChildResult& result) {
     return "unknown end";
 }
 
+bool write_reply(const std::string& bytes) {
+    const char* at = bytes.data();
+    std::size_t left = bytes.size();
+    while (left > 0) {
+        const ssize_t n = ::write(STDOUT_FILENO, at, left);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return false;
+        at += n;
+        left -= static_cast<std::size_t>(n);
+    }
+    return true;
+}
+
 }  // namespace esf::detail

@@ -43,4 +43,8 @@ ChildResult run_child(const std::string& helper, const std::vector<std::string>&
 /// "signal N" or "exit status N", for messages.
 std::string describe_end(const ChildResult& result);
 
+/// The helper's side: writes all of `bytes` to its stdout (retrying after EINTR); false when the
+/// parent stopped reading.
+bool write_reply(const std::string& bytes);
+
 }  // namespace esf::detail

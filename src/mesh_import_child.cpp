@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "child_process.hpp"
 #include "esf/error.hpp"
 #include "mesh_import.hpp"
 
@@ -26,19 +27,6 @@
 #endif
 
 namespace {
-
-bool write_all(const std::string& bytes) {
-    const char* at = bytes.data();
-    std::size_t left = bytes.size();
-    while (left > 0) {
-        const ssize_t n = ::write(STDOUT_FILENO, at, left);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return false;
-        at += n;
-        left -= static_cast<std::size_t>(n);
-    }
-    return true;
-}
 
 void put(std::string& out, const void* data, std::size_t size) {
     out.append(static_cast<const char*>(data), size);
@@ -122,5 +110,5 @@ int main(int argc, char** argv) {
             error_reply(esf::detail::kMeshReplyIoError,
                         esf::file_message(path, 0, std::string("cannot read mesh: ") + e.what()));
     }
-    return write_all(reply) ? 0 : esf::detail::kMeshImportWriteFailed;
+    return esf::detail::write_reply(reply) ? 0 : esf::detail::kMeshImportWriteFailed;
 }
