@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -869,7 +870,21 @@ TEST_F(TrainingRunTest, KilledProcessResumesToTheSameDatabase) {
         const Database killed(db_path);  // readable as it is, log and all
         for (const auto& m : killed.models()) EXPECT_EQ(m.views + m.skipped_views, 20u);
     }
-    Database db(db_path, OpenMode::kWrite);
+    // The writer's lock goes with the killed process. A mesh importer it was starting at that
+    // moment shares the lock's file until its exec (posix_spawn's child closes the descriptor
+    // there), so the lock may outlive the process by that instant: allow it a few seconds.
+    std::optional<Database> reopened;
+    for (int i = 0; i < 500 && !reopened; ++i) {
+        try {
+            reopened.emplace(db_path, OpenMode::kWrite);
+        } catch (const IoError& e) {
+            ASSERT_NE(std::string(e.what()).find("in use by another training"), std::string::npos)
+                << e.what();
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+    }
+    ASSERT_TRUE(reopened.has_value()) << "the killed training's lock never went";
+    Database& db = *reopened;
     const TrainingResult r = train(root(), db, fast_options());
     EXPECT_GE(r.models_existing, 1u);
     expect_same(snapshot(full), snapshot(db));
