@@ -1,7 +1,7 @@
-// pcl_esf_describe FILE: PCL's own pipeline for one cloud, as a whole process:
+// pcl_esf_describe FILE...: PCL's own pipeline for each cloud, in one process:
 // pcl::io::loadPCDFile, non-finite points dropped, pcl::ESFEstimation, one CSV line
-// "FILE,v0,...,v639" on stdout. The counterpart of `esf describe --threads 1 FILE` in
-// bench/cloud_io_batch.sh.
+// "FILE,v0,...,v639" per file on stdout. The counterpart of `esf describe --threads 1 FILE...`
+// in bench/cloud_io_batch.sh (one file per process, or all files in one, as `xargs` runs them).
 
 #include <pcl/features/esf.h>
 #include <pcl/io/pcd_io.h>
@@ -11,12 +11,9 @@
 #include <cstdio>
 #include <string>
 
-int main(int argc, char** argv) {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: pcl_esf_describe FILE.pcd\n");
-        return 1;
-    }
-    const std::string file = argv[1];
+namespace {
+
+int describe(const std::string& file) {
     pcl::PointCloud<pcl::PointXYZ> raw;
     if (pcl::io::loadPCDFile(file, raw) != 0) {
         std::fprintf(stderr, "pcl_esf_describe: cannot read %s\n", file.c_str());
@@ -43,4 +40,17 @@ int main(int argc, char** argv) {
     }
     std::printf("%s\n", line.c_str());
     return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) {
+        std::fprintf(stderr, "usage: pcl_esf_describe FILE.pcd...\n");
+        return 1;
+    }
+    int status = 0;
+    for (int i = 1; i < argc; ++i)
+        if (const int rc = describe(argv[i]); rc != 0) status = rc;
+    return status;
 }
