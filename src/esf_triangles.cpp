@@ -44,6 +44,7 @@ constexpr int kTrashBin = 640;  // where the ratio histogram counts lines that a
 constexpr float kAcos[8] = {1.5707963050f, -0.2145988016f, 0.0889789874f, -0.0501743046f,
                             0.0308918810f, -0.0170881256f, 0.0066700901f, -0.0012624911f};
 constexpr float kBinsPerRadian = static_cast<float>(kTopBin / (std::numbers::pi / 2.0));
+constexpr float kPi = std::numbers::pi_v<float>;
 
 using detail::splitmix64;
 
@@ -109,15 +110,19 @@ void sample_block_scalar(Streams& streams, const PackedPoint* points, std::uint3
         const float heron = s * (s - a) * (s - b) * (s - c);
         const std::uint32_t i1 = block.index[0][l], i2 = block.index[1][l], i3 = block.index[2][l];
         if (i1 == i2 || i1 == i3 || i2 == i3 || !(heron > min_heron)) continue;
-        const float cos1 = std::abs(x21 * x31 + y21 * y31 + z21 * z31) / (a * b);
-        const float cos2 = std::abs(x23 * x31 + y23 * y31 + z23 * z31) / (c * b);
-        const float cos3 = std::abs(x23 * x21 + y23 * y21 + z23 * z21) / (c * a);
+        const float dot1 = x21 * x31 + y21 * y31 + z21 * z31;
+        const float dot3 = x23 * x31 + y23 * y31 + z23 * z31;
+        const float dot2 = x23 * x21 + y23 * y21 + z23 * z21;
+        const float inverse = 1.0f / (a * b * c);
+        const float angle1 = fast_acos(std::abs(dot1) * (c * inverse));
+        const float angle3 = fast_acos(std::abs(dot3) * (a * inverse));
+        const float angle2 = third_angle(angle1, angle3, dot1, dot3, dot2);
         block.accepted |= 1u << l;
         block.a[l] = a, block.b[l] = b, block.c[l] = c;
         block.d3[l] = std::sqrt(std::sqrt(heron));
-        block.angle_bins[l] = static_cast<std::uint32_t>(fast_angle_bin(cos1)) |
-                              static_cast<std::uint32_t>(fast_angle_bin(cos2)) << 8 |
-                              static_cast<std::uint32_t>(fast_angle_bin(cos3)) << 16;
+        block.angle_bins[l] = static_cast<std::uint32_t>(angle_bin(angle1)) |
+                              static_cast<std::uint32_t>(angle_bin(angle3)) << 8 |
+                              static_cast<std::uint32_t>(angle_bin(angle2)) << 16;
         block.cell[0][l] = p1.cell, block.cell[1][l] = p2.cell, block.cell[2][l] = p3.cell;
     }
 }
@@ -172,16 +177,31 @@ ESF_TARGET_AVX512 inline __m512i bounded16(__m512i bits, __m512i n) {
     return _mm512_mask_blend_epi32(static_cast<__mmask16>(0xAAAA), even, odd);
 }
 
-ESF_TARGET_AVX512 inline __m512 angle_bin16(__m512 c) {
+/// fast_acos() on 16 lanes.
+ESF_TARGET_AVX512 inline __m512 acos16(__m512 c) {
     const __m512 x = _mm512_min_ps(c, _mm512_set1_ps(1.0f));
     __m512 p = _mm512_set1_ps(kAcos[7]);
     for (int k = 6; k >= 0; --k) p = _mm512_fmadd_ps(p, x, _mm512_set1_ps(kAcos[k]));
-    const __m512 angle = _mm512_mul_ps(_mm512_sqrt_ps(_mm512_sub_ps(_mm512_set1_ps(1.0f), x)), p);
-    return _mm512_add_ps(_mm512_mul_ps(angle, _mm512_set1_ps(kBinsPerRadian)),
-                         _mm512_set1_ps(0.5f));
+    return _mm512_mul_ps(_mm512_sqrt_ps(_mm512_sub_ps(_mm512_set1_ps(1.0f), x)), p);
 }
 
-ESF_TARGET_AVX512 inline __m512i bin_of16(__m512 t) {
+/// third_angle() on 16 lanes.
+ESF_TARGET_AVX512 inline __m512 third_angle16(__m512 angle1, __m512 angle3, __m512 dot1,
+                                              __m512 dot3, __m512 dot2) {
+    const __m512 zero = _mm512_setzero_ps();
+    __m512 angle2 = _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(kPi), angle1), angle3);
+    angle2 = _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(dot3, zero, _CMP_GT_OQ),
+                                _mm512_sub_ps(angle3, angle1));
+    angle2 = _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(dot1, zero, _CMP_LT_OQ),
+                                _mm512_sub_ps(angle1, angle3));
+    return _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(dot2, zero, _CMP_LT_OQ),
+                              _mm512_add_ps(angle1, angle3));
+}
+
+/// angle_bin() on 16 lanes.
+ESF_TARGET_AVX512 inline __m512i angle_bin16(__m512 angle) {
+    const __m512 t = _mm512_add_ps(_mm512_mul_ps(angle, _mm512_set1_ps(kBinsPerRadian)),
+                                   _mm512_set1_ps(0.5f));
     return _mm512_min_epi32(_mm512_cvttps_epi32(t), _mm512_set1_epi32(kTopBin));
 }
 
@@ -266,16 +286,20 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
             done.attempts += usable;
         }
         if (got == 0) continue;
-        const __m512 cos1 = _mm512_div_ps(
-            _mm512_andnot_ps(sign, dot16(x21, y21, z21, x31, y31, z31)), _mm512_mul_ps(a, b));
-        const __m512 cos2 = _mm512_div_ps(
-            _mm512_andnot_ps(sign, dot16(x23, y23, z23, x31, y31, z31)), _mm512_mul_ps(c, b));
-        const __m512 cos3 = _mm512_div_ps(
-            _mm512_andnot_ps(sign, dot16(x23, y23, z23, x21, y21, z21)), _mm512_mul_ps(c, a));
+        const __m512 dot1 = dot16(x21, y21, z21, x31, y31, z31);
+        const __m512 dot3 = dot16(x23, y23, z23, x31, y31, z31);
+        const __m512 dot2 = dot16(x23, y23, z23, x21, y21, z21);
+        const __m512 inverse =
+            _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_mul_ps(_mm512_mul_ps(a, b), c));
+        const __m512 angle1 =
+            acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, dot1), _mm512_mul_ps(c, inverse)));
+        const __m512 angle3 =
+            acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, dot3), _mm512_mul_ps(a, inverse)));
+        const __m512 angle2 = third_angle16(angle1, angle3, dot1, dot3, dot2);
         const __m512i bins =
-            _mm512_or_si512(_mm512_or_si512(bin_of16(angle_bin16(cos1)),
-                                            _mm512_slli_epi32(bin_of16(angle_bin16(cos2)), 8)),
-                            _mm512_slli_epi32(bin_of16(angle_bin16(cos3)), 16));
+            _mm512_or_si512(_mm512_or_si512(angle_bin16(angle1),
+                                            _mm512_slli_epi32(angle_bin16(angle3), 8)),
+                            _mm512_slli_epi32(angle_bin16(angle2), 16));
         const __m512 d3 = _mm512_sqrt_ps(_mm512_sqrt_ps(heron));
         const std::size_t at = done.accepted;
         const __mmask16 out = static_cast<__mmask16>((1u << got) - 1u);
@@ -418,11 +442,22 @@ ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std:
 
 }  // namespace
 
-int fast_angle_bin(float c) {
+float fast_acos(float c) {
     const float x = std::min(c, 1.0f);
     float p = kAcos[7];
     for (int k = 6; k >= 0; --k) p = std::fma(p, x, kAcos[k]);
-    const float angle = std::sqrt(1.0f - x) * p;
+    return std::sqrt(1.0f - x) * p;
+}
+
+float third_angle(float angle1, float angle3, float dot1, float dot3, float dot2) {
+    if (dot2 < 0.0f) return angle1 + angle3;  // obtuse at p2: pi - (pi - angle1 - angle3)
+    if (dot1 < 0.0f) return angle1 - angle3;  // obtuse at p1
+    if (dot3 > 0.0f) return angle3 - angle1;  // obtuse at p3
+    return kPi - angle1 - angle3;
+}
+
+int angle_bin(float angle) {
+    // Truncation: a difference of angles that rounds a hair below zero still lands in bin 0.
     return std::min(static_cast<int>(angle * kBinsPerRadian + 0.5f), kTopBin);
 }
 

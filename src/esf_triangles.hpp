@@ -53,9 +53,19 @@ SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count
                                   std::uint64_t seed, std::size_t max_attempts, float min_heron,
                                   bool simd, TriangleSet& triangles);
 
-/// A3 bin of an angle with |cos| = c, round(acos(c) / (pi/2) * 63), from a polynomial acos
-/// (Abramowitz & Stegun 4.4.46, error 2e-8): the fast sampler's angle binning.
-int fast_angle_bin(float c);
+/// acos(c) for c in [0, 1] (larger values count as 1) from a polynomial (Abramowitz & Stegun
+/// 4.4.46, error 2e-8): the fast sampler's angles.
+float fast_acos(float c);
+
+/// The fast sampler's third angle. A3 takes each angle of a triangle folded into [0, pi/2]
+/// (acos of |cos|). Of a triangle's three angles at most one is obtuse, so the folded angle at
+/// p2 follows from the folded angles at p1 and p3 without a third acos: the raw dot products
+/// tell which angle is obtuse (dot1 = (p2-p1).(p3-p1), dot3 = (p2-p3).(p3-p1),
+/// dot2 = (p2-p3).(p2-p1); obtuse at p1: dot1 < 0, at p3: dot3 > 0, at p2: dot2 < 0).
+float third_angle(float angle1, float angle3, float dot1, float dot3, float dot2);
+
+/// A3 bin of a folded angle: round(angle / (pi/2) * 63), at most 63.
+int angle_bin(float angle);
 
 /// The ten histograms as integer counts (A3 counts are weighted by the visited cells of the
 /// line opposite to the angle), from the triangles and the occupied / visited cells of their
