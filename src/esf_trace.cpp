@@ -228,6 +228,15 @@ constexpr std::int32_t kGridCells = kGridSide * kGridSide * kGridSide;
 constexpr std::int32_t kCubePad = 8448;  // anchors reach down to cell -(2 + 2 * 64 + 2 * 4096)
 constexpr int kCubeWordPad = kCubePad / 64;
 
+/// 1 / (2L) for L = 1 .. 64 (the AVX-512 kernel's slope set-up).
+constexpr std::array<float, 64> half_per_cell_table() {
+    std::array<float, 64> table{};
+    for (int l = 1; l <= 64; ++l)
+        table[static_cast<std::size_t>(l - 1)] = 0.5f / static_cast<float>(l);
+    return table;
+}
+alignas(64) constexpr std::array<float, 64> kHalfPerCell = half_per_cell_table();
+
 // A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
 constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
 constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;

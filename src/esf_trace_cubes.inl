@@ -57,7 +57,15 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
     const AxisRoles roles{x_major, y_major, z_major};
     const __m512i cells = _mm512_max_epi32(major_of(roles, length), one);  // visited: max(L, 1)
     const __m512 l = _mm512_cvtepi32_ps(cells);
-    const __m512 half_per_cell = _mm512_div_ps(_mm512_set1_ps(0.5f), l);  // 1 / (2L)
+    // 1 / (2L) from a table of the 64 possible values (a division's latency would hold up the
+    // group's first steps).
+    const __m512i slot = _mm512_sub_epi32(cells, one);
+    const __m512 half_per_cell =
+        _mm512_mask_blend_ps(_mm512_cmpge_epi32_mask(slot, _mm512_set1_epi32(32)),
+                             _mm512_permutex2var_ps(_mm512_load_ps(kHalfPerCell.data()), slot,
+                                                    _mm512_load_ps(kHalfPerCell.data() + 16)),
+                             _mm512_permutex2var_ps(_mm512_load_ps(kHalfPerCell.data() + 32), slot,
+                                                    _mm512_load_ps(kHalfPerCell.data() + 48)));
     CubeLanes lanes;
     lanes.start = _mm512_cvtepi32_ps(_mm512_add_epi32(s, anchor_offset));
     lanes.major_step = _mm512_cvtepi32_ps(major_of(roles, step));
@@ -85,10 +93,15 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
     return lanes;
 }
 
-/// Cells i, i+1 and i+2 of every lane (`i` in every lane of fi; lanes past their end masked
-/// when `tail`).
-template <bool tail>
+/// How many of the cells i, i+1 and i+2 trace_triple() counts: all three, the first one or two
+/// in every lane (the end of a group whose lines have one length), or per lane (kPerLane: lanes
+/// past their end masked).
+enum CellsCounted { kPerLane = 0, kFirstCell = 1, kFirstTwoCells = 2, kAllCells = 3 };
+
+/// Cells i, i+1 and i+2 of every lane (`i` in every lane of fi), as many as `counted` says.
+template <CellsCounted counted>
 ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, __m512 fi) {
+    constexpr bool tail = counted == kPerLane;
     constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
     const __m512 v1 = _mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept);
     const __m512 v2 = _mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept);
@@ -115,6 +128,8 @@ ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, __m
         steps1, lanes.weight1f, _mm512_fmadd_ps(steps2, lanes.weight2f, lanes.base2)));
     const __m512i one = _mm512_set1_epi32(1);
     __mmask16 live[3] = {0xffff, 0xffff, 0xffff};  // cells i, i+1, i+2 before the lane's end
+    if (counted == kFirstCell || counted == kFirstTwoCells) live[2] = 0;
+    if (counted == kFirstCell) live[1] = 0;
     if (tail)
         for (int k = 0; k < 3; ++k)
             live[k] = _mm512_cmp_ps_mask(
@@ -171,9 +186,14 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::ui
         int i = first_cell;
         __m512 fi = _mm512_set1_ps(static_cast<float>(i));
         for (; i + 2 < shortest; i += 3, fi = _mm512_add_ps(fi, three))
-            trace_triple<false>(lanes, cubes, fi);
-        for (; i < longest; i += 3, fi = _mm512_add_ps(fi, three))
-            trace_triple<true>(lanes, cubes, fi);
+            trace_triple<kAllCells>(lanes, cubes, fi);
+        if (shortest == longest) {  // most groups: every lane ends at the same cell
+            if (longest - i == 1) trace_triple<kFirstCell>(lanes, cubes, fi);
+            if (longest - i == 2) trace_triple<kFirstTwoCells>(lanes, cubes, fi);
+        } else {
+            for (; i < longest; i += 3, fi = _mm512_add_ps(fi, three))
+                trace_triple<kPerLane>(lanes, cubes, fi);
+        }
         alignas(64) std::uint32_t result[16], line[16];
         _mm512_store_si512(result, lanes.occupied);
         _mm512_store_si512(line, lines);

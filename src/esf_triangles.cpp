@@ -200,8 +200,8 @@ ESF_TARGET_AVX512 inline __m512 third_angle16(__m512 angle1, __m512 angle3, __m5
 
 /// angle_bin() on 16 lanes.
 ESF_TARGET_AVX512 inline __m512i angle_bin16(__m512 angle) {
-    const __m512 t = _mm512_add_ps(_mm512_mul_ps(angle, _mm512_set1_ps(kBinsPerRadian)),
-                                   _mm512_set1_ps(0.5f));
+    const __m512 t =
+        _mm512_add_ps(_mm512_mul_ps(angle, _mm512_set1_ps(kBinsPerRadian)), _mm512_set1_ps(0.5f));
     return _mm512_min_epi32(_mm512_cvttps_epi32(t), _mm512_set1_epi32(kTopBin));
 }
 
@@ -296,10 +296,9 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
         const __m512 angle3 =
             acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, dot3), _mm512_mul_ps(a, inverse)));
         const __m512 angle2 = third_angle16(angle1, angle3, dot1, dot3, dot2);
-        const __m512i bins =
-            _mm512_or_si512(_mm512_or_si512(angle_bin16(angle1),
-                                            _mm512_slli_epi32(angle_bin16(angle3), 8)),
-                            _mm512_slli_epi32(angle_bin16(angle2), 16));
+        const __m512i bins = _mm512_or_si512(
+            _mm512_or_si512(angle_bin16(angle1), _mm512_slli_epi32(angle_bin16(angle3), 8)),
+            _mm512_slli_epi32(angle_bin16(angle2), 16));
         const __m512 d3 = _mm512_sqrt_ps(_mm512_sqrt_ps(heron));
         const std::size_t at = done.accepted;
         const __mmask16 out = static_cast<__mmask16>((1u << got) - 1u);
