@@ -155,8 +155,15 @@ inline std::uint16_t trace_one(const VoxelGrid& grid, std::uint32_t start, const
 
 /// For a counting sort by visited count: where the lines of each count start.
 std::array<std::uint32_t, kGridSide + 1> length_offsets(std::span<const std::uint8_t> visited) {
+    // Four interleaved tallies, summed after: runs of one length then do not wait on each other.
+    std::array<std::array<std::uint32_t, kGridSide + 1>, 4> tally{};
+    std::size_t i = 0;
+    for (; i + 4 <= visited.size(); i += 4)
+        for (std::size_t k = 0; k < 4; ++k) ++tally[k][visited[i + k]];
+    for (; i < visited.size(); ++i) ++tally[0][visited[i]];
     std::array<std::uint32_t, kGridSide + 1> offsets{};
-    for (const std::uint8_t v : visited) ++offsets[v];
+    for (std::size_t v = 0; v <= kGridSide; ++v)
+        offsets[v] = tally[0][v] + tally[1][v] + tally[2][v] + tally[3][v];
     std::uint32_t sum = 0;
     for (auto& offset : offsets) {
         const std::uint32_t count = offset;
@@ -182,11 +189,20 @@ void visited_scalar(std::span<const std::uint32_t> starts, std::span<const std::
 
 #define ESF_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
 
-ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
-                                      std::span<const std::uint32_t> ends,
-                                      std::span<std::uint8_t> visited) {
+// A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
+constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
+constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
+constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
+
+/// Visited counts and records of all lines, 16 at a time.
+ESF_TARGET_AVX512 void visited_records_avx512(std::span<const std::uint32_t> starts,
+                                              std::span<const std::uint32_t> ends,
+                                              std::span<std::uint8_t> visited,
+                                              std::vector<std::uint64_t>& records) {
     const __m512i m63 = _mm512_set1_epi32(63), one = _mm512_set1_epi32(1);
     const std::size_t count = starts.size();
+    records.resize(count);
+    const __m512i lane = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
     std::size_t i = 0;
     for (; i + 16 <= count; i += 16) {
         const __m512i s = _mm512_loadu_si512(starts.data() + i);
@@ -199,9 +215,25 @@ ESF_TARGET_AVX512 void visited_avx512(std::span<const std::uint32_t> starts,
         }
         _mm_storeu_si128(reinterpret_cast<__m128i*>(visited.data() + i),
                          _mm512_cvtepi32_epi8(longest));
+        for (int half = 0; half < 2; ++half) {
+            const __m256i s8 = half ? _mm512_extracti64x4_epi64(s, 1) : _mm512_castsi512_si256(s);
+            const __m256i t8 = half ? _mm512_extracti64x4_epi64(t, 1) : _mm512_castsi512_si256(t);
+            const __m512i line = _mm512_slli_epi64(
+                _mm512_add_epi64(lane, _mm512_set1_epi64(static_cast<long long>(i + 8 * half))),
+                kLineShift);
+            _mm512_storeu_si512(
+                records.data() + i + 8 * half,
+                _mm512_or_si512(
+                    _mm512_or_si512(_mm512_cvtepu32_epi64(s8),
+                                    _mm512_slli_epi64(_mm512_cvtepu32_epi64(t8), kEndShift)),
+                    line));
+        }
     }
-    for (; i < count; ++i)
+    for (; i < count; ++i) {
         visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
+        records[i] =
+            starts[i] | std::uint64_t{ends[i]} << kEndShift | std::uint64_t{i} << kLineShift;
+    }
 }
 
 // The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
@@ -237,19 +269,12 @@ constexpr std::array<float, 64> half_per_cell_table() {
 }
 alignas(64) constexpr std::array<float, 64> kHalfPerCell = half_per_cell_table();
 
-// A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
-constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
-constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
-constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
-
-/// Lines sorted by visited count, as records.
-void sort_lines(std::span<const std::uint32_t> starts, std::span<const std::uint32_t> ends,
-                std::span<const std::uint8_t> visited, std::vector<std::uint64_t>& sorted) {
+/// The records sorted by visited count.
+void sort_lines(std::span<const std::uint64_t> records, std::span<const std::uint8_t> visited,
+                std::vector<std::uint64_t>& sorted) {
     std::array<std::uint32_t, kGridSide + 1> bucket = length_offsets(visited);
     sorted.resize(visited.size());
-    for (std::size_t i = 0; i < visited.size(); ++i)
-        sorted[bucket[visited[i]]++] =
-            starts[i] | std::uint64_t{ends[i]} << kEndShift | std::uint64_t{i} << kLineShift;
+    for (std::size_t i = 0; i < visited.size(); ++i) sorted[bucket[visited[i]]++] = records[i];
 }
 
 /// Entries 16 J .. 16 J + 15 of a row of the cube table from its four byte planes. J is a
@@ -339,8 +364,8 @@ ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
                                           std::span<std::uint16_t> occupied,
                                           std::span<std::uint8_t> visited, TraceScratch& scratch,
                                           bool skip_known, bool with_popcnt) {
-    visited_avx512(starts, ends, visited);
-    sort_lines(starts, ends, visited, scratch.sorted);
+    visited_records_avx512(starts, ends, visited, scratch.records);
+    sort_lines(scratch.records, visited, scratch.sorted);
     build_cubes(grid, scratch);
     const std::uint32_t* cubes = scratch.cubes.data() + kCubePad;
     if (with_popcnt)
