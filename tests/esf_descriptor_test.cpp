@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "esf_trace.hpp"
+#include "esf_triangles.hpp"
 
 namespace {
 
@@ -424,7 +425,83 @@ TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
     }
 }
 
+// Lines of one length in whole groups of 16 (and a few more), for every length: groups whose
+// lanes all end at the same cell finish without per-lane masks in the AVX-512 kernel.
+TEST(LineTrace, SimdKernelsMatchScalarOnGroupsOfOneLength) {
+    std::mt19937 rng(17);
+    esf::detail::VoxelGrid grid;
+    grid.clear();
+    std::uniform_int_distribution<std::uint32_t> coord(0, 63);
+    std::vector<std::uint32_t> points;
+    for (int i = 0; i < 2000; ++i) {
+        points.push_back(pack_cell(coord(rng), coord(rng), coord(rng)));
+        grid.set(points.back());
+    }
+    grid.dilate(64);
+    RandomLines lines;
+    for (std::uint32_t length = 0; length < 64; ++length)
+        for (int k = 0; k < 32 + static_cast<int>(length % 5); ++k) {
+            // A line of `length` steps along x from a random cell, its minor axes random.
+            std::uniform_int_distribution<std::uint32_t> x0(0, 63 - length), minor(0, 63);
+            const std::uint32_t x = x0(rng), y = minor(rng), z = minor(rng);
+            std::uniform_int_distribution<std::uint32_t> y1(y >= length ? y - length : 0,
+                                                            std::min(63u, y + length));
+            std::uniform_int_distribution<std::uint32_t> z1(z >= length ? z - length : 0,
+                                                            std::min(63u, z + length));
+            const std::uint32_t a = pack_cell(x, y, z), b = pack_cell(x + length, y1(rng), z1(rng));
+            lines.starts.push_back(k % 2 ? a : b);
+            lines.ends.push_back(k % 2 ? b : a);
+        }
+    for (auto kernel : kSimdKernels) {
+        esf::detail::TraceScratch scratch;
+        expect_kernel_matches_scalar(grid, lines, kernel, esf::detail::LineEnds::kAny, scratch, "");
+    }
+}
+
 }  // namespace
+
+// The fast sampler's third angle against acos of the angle itself, on random triangles of every
+// kind (acute, right-ish, obtuse at each corner).
+TEST(EsfTriangles, ThirdAngleEqualsTheFoldedAngleAtP2) {
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> coordinate(-10.0f, 10.0f);
+    const auto folded = [](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+        return std::acos(std::abs(u.dot(v)) / (u.norm() * v.norm()));
+    };
+    int obtuse[3] = {0, 0, 0};
+    for (int t = 0; t < 20000; ++t) {
+        Eigen::Vector3f p1, p2, p3;
+        for (int k = 0; k < 3; ++k) {
+            p1[k] = coordinate(rng), p2[k] = coordinate(rng), p3[k] = coordinate(rng);
+        }
+        const Eigen::Vector3f v21 = p2 - p1, v31 = p3 - p1, v23 = p2 - p3;
+        const float a = v21.norm(), b = v31.norm(), c = v23.norm();
+        const float s = (a + b + c) / 2;
+        if (s * (s - a) * (s - b) * (s - c) < 1.0f) continue;  // ESF rejects thin triangles
+        const float dot1 = v21.dot(v31), dot3 = v23.dot(v31), dot2 = v23.dot(v21);
+        const float angle1 = esf::detail::fast_acos(std::abs(dot1) / (a * b));
+        const float angle3 = esf::detail::fast_acos(std::abs(dot3) / (c * b));
+        const double at_p2 = folded((p1 - p2).cast<double>(), (p3 - p2).cast<double>());
+        ASSERT_NEAR(esf::detail::third_angle(angle1, angle3, dot1, dot3, dot2), at_p2, 2e-5)
+            << "triangle " << t;
+        obtuse[0] += dot1 < 0, obtuse[1] += dot2<0, obtuse[2] += dot3> 0;
+        EXPECT_NEAR(angle1, folded(v21.cast<double>(), v31.cast<double>()), 2e-5);
+    }
+    for (int corner : obtuse) EXPECT_GT(corner, 100);  // every branch was taken
+}
+
+TEST(EsfTriangles, AngleBinsRoundToTheNearestOf64) {
+    const double bin_width = std::acos(-1.0) / 2 / 63;
+    for (int bin = 0; bin < 64; ++bin) {
+        EXPECT_EQ(esf::detail::angle_bin(static_cast<float>(bin * bin_width)), bin);
+        EXPECT_EQ(esf::detail::angle_bin(static_cast<float>((bin + 0.45) * bin_width)), bin);
+        if (bin > 0) {
+            EXPECT_EQ(esf::detail::angle_bin(static_cast<float>((bin - 0.45) * bin_width)), bin);
+        }
+    }
+    EXPECT_EQ(esf::detail::angle_bin(-1e-6f), 0);  // a difference of angles a hair below zero
+    EXPECT_EQ(esf::detail::angle_bin(2.0f), 63);
+}
 
 TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
     using esf::detail::TraceKernel;
