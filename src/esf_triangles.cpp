@@ -205,24 +205,15 @@ ESF_TARGET_AVX512 inline __m512i angle_bin16(__m512 angle) {
     return _mm512_min_epi32(_mm512_cvttps_epi32(t), _mm512_set1_epi32(kTopBin));
 }
 
-/// The x, y, z and cell of points[index[l]] for the 16 lanes (4x4 transposes of 16-byte loads).
-ESF_TARGET_AVX512 inline void load16(const PackedPoint* points, const std::uint32_t* index,
-                                     __m512& x, __m512& y, __m512& z, __m512i& cell) {
-    __m512 r[4];
-    for (int j = 0; j < 4; ++j) {
-        r[j] = _mm512_castps128_ps512(_mm_load_ps(&points[index[j]].x));
-        r[j] = _mm512_insertf32x4(r[j], _mm_load_ps(&points[index[j + 4]].x), 1);
-        r[j] = _mm512_insertf32x4(r[j], _mm_load_ps(&points[index[j + 8]].x), 2);
-        r[j] = _mm512_insertf32x4(r[j], _mm_load_ps(&points[index[j + 12]].x), 3);
-    }
-    const __m512d t0 = _mm512_castps_pd(_mm512_unpacklo_ps(r[0], r[1]));  // x0 x1 y0 y1
-    const __m512d t1 = _mm512_castps_pd(_mm512_unpackhi_ps(r[0], r[1]));  // z0 z1 c0 c1
-    const __m512d t2 = _mm512_castps_pd(_mm512_unpacklo_ps(r[2], r[3]));
-    const __m512d t3 = _mm512_castps_pd(_mm512_unpackhi_ps(r[2], r[3]));
-    x = _mm512_castpd_ps(_mm512_unpacklo_pd(t0, t2));
-    y = _mm512_castpd_ps(_mm512_unpackhi_pd(t0, t2));
-    z = _mm512_castpd_ps(_mm512_unpacklo_pd(t1, t3));
-    cell = _mm512_castpd_si512(_mm512_unpackhi_pd(t1, t3));
+/// The x, y, z and cell of points[index[l]] for the 16 lanes, by four gathers.
+ESF_TARGET_AVX512 inline void gather16(const PackedPoint* points, __m512i index, __m512& x,
+                                       __m512& y, __m512& z, __m512i& cell) {
+    const __m512i at = _mm512_slli_epi32(index, 1);  // in units of 8 bytes (a point is 16)
+    const auto* base = reinterpret_cast<const char*>(points);
+    x = _mm512_i32gather_ps(at, base, 8);
+    y = _mm512_i32gather_ps(at, base + 4, 8);
+    z = _mm512_i32gather_ps(at, base + 8, 8);
+    cell = _mm512_i32gather_epi32(at, base + 12, 8);
 }
 
 /// Stores the lanes of `keep`, in order, to dst[0 .. popcount(keep)).
@@ -245,19 +236,15 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
     __m512 max_d2 = _mm512_setzero_ps(), max_d3 = _mm512_setzero_ps();
     const std::size_t samples = set.samples;
     SampleCount done;
-    alignas(64) std::uint32_t index[3][kLanes];
     while (done.accepted < samples && done.attempts < max_attempts) {
         const __m512i i1 = bounded16(next16(s0, s1, s2, s3), n);
         const __m512i i2 = bounded16(next16(s0, s1, s2, s3), n);
         const __m512i i3 = bounded16(next16(s0, s1, s2, s3), n);
-        _mm512_store_si512(index[0], i1);
-        _mm512_store_si512(index[1], i2);
-        _mm512_store_si512(index[2], i3);
         __m512 x1, y1, z1, x2, y2, z2, x3, y3, z3;
         __m512i c1, c2, c3;
-        load16(points, index[0], x1, y1, z1, c1);
-        load16(points, index[1], x2, y2, z2, c2);
-        load16(points, index[2], x3, y3, z3, c3);
+        gather16(points, i1, x1, y1, z1, c1);
+        gather16(points, i2, x2, y2, z2, c2);
+        gather16(points, i3, x3, y3, z3, c3);
         const __m512 x21 = _mm512_sub_ps(x2, x1), y21 = _mm512_sub_ps(y2, y1),
                      z21 = _mm512_sub_ps(z2, z1);
         const __m512 x31 = _mm512_sub_ps(x3, x1), y31 = _mm512_sub_ps(y3, y1),
