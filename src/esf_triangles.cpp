@@ -38,7 +38,20 @@ constexpr int kLanes = 16;
 constexpr int kLineOutMaxOccupied = 7;
 constexpr int kTriangleOutMaxOccupied = 21;
 constexpr int kTriangleInMaxEmpty = 3;
-constexpr int kTrashBin = 640;  // where the ratio histogram counts lines that are not MIXED
+// The counts: four interleaved copies of blocks 0-7 (A3, D3, D2 IN and OUT), lane l counting into
+// copy l % 4 so that consecutive increments of one bin do not wait on each other's stores; then
+// one joint histogram of the MIXED lines over (D2 bin, ratio bin), whose row and column sums are
+// blocks 8 (D2 MIXED) and 9 (ratio). Every line then costs one increment instead of two.
+constexpr int kCopies = 4;
+constexpr int kCopyBins = 8 * kEsfBins;
+constexpr int kJointBase = kCopies * kCopyBins;
+constexpr int kCountBins = kJointBase + kEsfBins * kEsfBins;
+
+/// Position of a MIXED line's joint bin, relative to the copy lane l counts into.
+constexpr std::uint32_t joint_bin(std::size_t lane, int d2_bin, int ratio_bin) {
+    return static_cast<std::uint32_t>(kJointBase - static_cast<int>(lane % kCopies) * kCopyBins +
+                                      d2_bin * kEsfBins + ratio_bin);
+}
 
 // acos(x) = sqrt(1 - x) * (a0 + a1 x + ... + a7 x^7) on [0, 1] (A&S 4.4.46).
 constexpr float kAcos[8] = {1.5707963050f, -0.2145988016f, 0.0889789874f, -0.0501743046f,
@@ -311,10 +324,11 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
 
 bool use_avx512(bool simd) { return simd && esf_avx512_available(); }
 
-/// Histogram positions of 16 triangles: bins[slot][lane] into a 641-bin array (640: discard),
-/// slots 0-2 D2 of the lines, 3-5 their ratio, 6 D3, 7-9 A3 with weights weight[0..2].
+/// Histogram positions of 16 triangles, relative to the copy of each lane: bins[slot][lane],
+/// slots 0-2 the lines (D2 IN or OUT, or the joint bin of a MIXED line), 3 D3, 4-6 A3 with
+/// weights weight[0..2].
 struct HistogramBlock {
-    alignas(64) std::uint32_t bins[10][kLanes];
+    alignas(64) std::uint32_t bins[7][kLanes];
     alignas(64) std::uint32_t weight[3][kLanes];
 };
 
@@ -337,16 +351,10 @@ void histogram_block_scalar(const TriangleSet& set, const std::uint16_t* occupie
                 std::min(round_bin(pcl_division ? d / set.max_d2 * static_cast<float>(kTopBin)
                                                 : d * d2_scale),
                          kTopBin);
-            block.bins[k][l] = static_cast<std::uint32_t>((6 + (out     ? 1
-                                                                : mixed ? 2
-                                                                        : 0)) *
-                                                              64 +
-                                                          bin);
             const float ratio = static_cast<float>(o[k]) / static_cast<float>(v[k]);
-            block.bins[3 + k][l] =
-                mixed ? static_cast<std::uint32_t>(9 * 64 +
-                                                   round_bin(ratio * static_cast<float>(kTopBin)))
-                      : kTrashBin;
+            block.bins[k][l] =
+                mixed ? joint_bin(l, bin, round_bin(ratio * static_cast<float>(kTopBin)))
+                      : static_cast<std::uint32_t>((out ? 7 : 6) * kEsfBins + bin);
         }
         const int occupied_sum = o[0] + o[1] + o[2], visited_sum = v[0] + v[1] + v[2];
         const bool out = occupied_sum <= kTriangleOutMaxOccupied;
@@ -356,10 +364,10 @@ void histogram_block_scalar(const TriangleSet& set, const std::uint16_t* occupie
         const int d3_bin = std::min(
             round_bin(pcl_division ? d3 / set.max_d3 * static_cast<float>(kTopBin) : d3 * d3_scale),
             kTopBin);
-        block.bins[6][l] = static_cast<std::uint32_t>((3 + cls) * 64 + d3_bin);
+        block.bins[3][l] = static_cast<std::uint32_t>((3 + cls) * 64 + d3_bin);
         const std::uint32_t angles = set.angle_bins[t];
         for (int k = 0; k < 3; ++k)
-            block.bins[7 + k][l] = static_cast<std::uint32_t>(cls * 64) + (angles >> (8 * k) & 255);
+            block.bins[4 + k][l] = static_cast<std::uint32_t>(cls * 64) + (angles >> (8 * k) & 255);
         // Each angle is weighted by the visited cells of the line opposite to it.
         block.weight[0][l] = static_cast<std::uint32_t>(v[2]);
         block.weight[1][l] = static_cast<std::uint32_t>(v[0]);
@@ -374,6 +382,12 @@ ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std:
     const std::size_t s = set.samples;
     const __m512i one = _mm512_set1_epi32(1), top = _mm512_set1_epi32(kTopBin);
     const __m512 half = _mm512_set1_ps(0.5f), top_f = _mm512_set1_ps(static_cast<float>(kTopBin));
+    static_assert(kEsfBins == 64 && kLanes % kCopies == 0);
+    const __m512i joint_base = _mm512_setr_epi32(
+        joint_bin(0, 0, 0), joint_bin(1, 0, 0), joint_bin(2, 0, 0), joint_bin(3, 0, 0),
+        joint_bin(4, 0, 0), joint_bin(5, 0, 0), joint_bin(6, 0, 0), joint_bin(7, 0, 0),
+        joint_bin(8, 0, 0), joint_bin(9, 0, 0), joint_bin(10, 0, 0), joint_bin(11, 0, 0),
+        joint_bin(12, 0, 0), joint_bin(13, 0, 0), joint_bin(14, 0, 0), joint_bin(15, 0, 0));
     __m512i o[3], v[3];
     for (int k = 0; k < 3; ++k) {
         const std::size_t at = static_cast<std::size_t>(k) * s + t;
@@ -389,16 +403,15 @@ ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std:
         const __m512i bin = _mm512_min_epi32(
             _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(d, _mm512_set1_ps(d2_scale)), half)),
             top);
-        __m512i block_id = _mm512_set1_epi32(6 * 64);
-        block_id = _mm512_mask_mov_epi32(block_id, out, _mm512_set1_epi32(7 * 64));
-        block_id = _mm512_mask_mov_epi32(block_id, mixed, _mm512_set1_epi32(8 * 64));
-        _mm512_store_si512(block.bins[k], _mm512_add_epi32(block_id, bin));
+        const __m512i in_or_out =
+            _mm512_mask_add_epi32(_mm512_add_epi32(bin, _mm512_set1_epi32(6 * kEsfBins)), out, bin,
+                                  _mm512_set1_epi32(7 * kEsfBins));
         const __m512 ratio = _mm512_div_ps(_mm512_cvtepi32_ps(o[k]), _mm512_cvtepi32_ps(v[k]));
         const __m512i ratio_bin =
             _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(ratio, top_f), half));
-        _mm512_store_si512(block.bins[3 + k],
-                           _mm512_mask_add_epi32(_mm512_set1_epi32(kTrashBin), mixed, ratio_bin,
-                                                 _mm512_set1_epi32(9 * 64)));
+        const __m512i joint =
+            _mm512_add_epi32(_mm512_add_epi32(joint_base, _mm512_slli_epi32(bin, 6)), ratio_bin);
+        _mm512_store_si512(block.bins[k], _mm512_mask_mov_epi32(in_or_out, mixed, joint));
     }
     const __m512i occupied_sum = _mm512_add_epi32(_mm512_add_epi32(o[0], o[1]), o[2]);
     const __m512i visited_sum = _mm512_add_epi32(_mm512_add_epi32(v[0], v[1]), v[2]);
@@ -413,13 +426,13 @@ ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std:
     const __m512 d3 = _mm512_loadu_ps(&set.d3[t]);
     const __m512i d3_bin = _mm512_min_epi32(
         _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(d3, _mm512_set1_ps(d3_scale)), half)), top);
-    _mm512_store_si512(block.bins[6],
+    _mm512_store_si512(block.bins[3],
                        _mm512_add_epi32(_mm512_add_epi32(cls, _mm512_set1_epi32(3 * 64)), d3_bin));
     const __m512i angles = _mm512_loadu_si512(&set.angle_bins[t]);
     const __m512i byte = _mm512_set1_epi32(255);
     for (int k = 0; k < 3; ++k)
         _mm512_store_si512(
-            block.bins[7 + k],
+            block.bins[4 + k],
             _mm512_add_epi32(cls, _mm512_and_si512(_mm512_srli_epi32(angles, 8 * k), byte)));
     _mm512_store_si512(block.weight[0], v[2]);
     _mm512_store_si512(block.weight[1], v[0]);
@@ -476,10 +489,7 @@ SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count
 
 EsfCounts histogram_triangles(const TriangleSet& set, const std::uint16_t* occupied,
                               const std::uint8_t* visited, bool pcl_division, bool simd) {
-    // Four interleaved copies (lane l counts into copy l % 4), summed at the end: consecutive
-    // increments of one bin then do not wait on each other's stores.
-    constexpr int kCopies = 4;
-    std::uint32_t copies[kCopies][kTrashBin + 1] = {};
+    std::array<std::uint32_t, kCountBins> tally{};  // see kCopies
     // The fast sampler multiplies by the reciprocal of the maximum (a last-bit difference at a
     // bin border, far below the sampling noise).
     const float d2_scale = static_cast<float>(kTopBin) / set.max_d2;
@@ -496,9 +506,9 @@ EsfCounts histogram_triangles(const TriangleSet& set, const std::uint16_t* occup
         // Two lanes' positions per load (the increments are bound by memory operations).
         std::size_t l = 0;
         for (; l + 2 <= lanes; l += 2) {
-            std::uint32_t* first_copy = copies[l % kCopies];
-            std::uint32_t* second_copy = copies[(l + 1) % kCopies];
-            for (int k = 0; k < 7; ++k) {
+            std::uint32_t* first_copy = tally.data() + (l % kCopies) * kCopyBins;
+            std::uint32_t* second_copy = tally.data() + ((l + 1) % kCopies) * kCopyBins;
+            for (int k = 0; k < 4; ++k) {
                 std::uint64_t bins;
                 std::memcpy(&bins, &block.bins[k][l], sizeof bins);
                 ++first_copy[static_cast<std::uint32_t>(bins)];
@@ -506,24 +516,34 @@ EsfCounts histogram_triangles(const TriangleSet& set, const std::uint16_t* occup
             }
             for (int k = 0; k < 3; ++k) {
                 std::uint64_t bins, weights;
-                std::memcpy(&bins, &block.bins[7 + k][l], sizeof bins);
+                std::memcpy(&bins, &block.bins[4 + k][l], sizeof bins);
                 std::memcpy(&weights, &block.weight[k][l], sizeof weights);
                 first_copy[static_cast<std::uint32_t>(bins)] += static_cast<std::uint32_t>(weights);
                 second_copy[bins >> 32] += static_cast<std::uint32_t>(weights >> 32);
             }
         }
         for (; l < lanes; ++l) {
-            std::uint32_t* h = copies[l % kCopies];
-            for (int k = 0; k < 7; ++k) ++h[block.bins[k][l]];
-            for (int k = 0; k < 3; ++k) h[block.bins[7 + k][l]] += block.weight[k][l];
+            std::uint32_t* h = tally.data() + (l % kCopies) * kCopyBins;
+            for (int k = 0; k < 4; ++k) ++h[block.bins[k][l]];
+            for (int k = 0; k < 3; ++k) h[block.bins[4 + k][l]] += block.weight[k][l];
         }
     }
     EsfCounts counts{};
-    for (int b = 0; b < 10; ++b)
-        for (int i = 0; i < 64; ++i) {
+    for (int b = 0; b < 8; ++b)
+        for (int i = 0; i < kEsfBins; ++i) {
             std::uint32_t total = 0;
-            for (const auto& copy : copies) total += copy[b * 64 + i];
+            for (int c = 0; c < kCopies; ++c)
+                total += tally[static_cast<std::size_t>(c * kCopyBins + b * kEsfBins + i)];
             counts[static_cast<std::size_t>(b)][static_cast<std::size_t>(i)] = total;
+        }
+    // Blocks 8 (D2 of the MIXED lines) and 9 (their ratio): the joint histogram's row and
+    // column sums.
+    const std::uint32_t* joint = tally.data() + kJointBase;
+    for (std::size_t d2 = 0; d2 < kEsfBins; ++d2)
+        for (std::size_t ratio = 0; ratio < kEsfBins; ++ratio) {
+            const std::uint32_t n = joint[d2 * kEsfBins + ratio];
+            counts[8][d2] += n;
+            counts[9][ratio] += n;
         }
     return counts;
 }
