@@ -35,7 +35,7 @@ struct EsfEstimator::Workspace {
     std::vector<std::uint32_t> cells;         // pcl sampler: cell of each point
     std::vector<detail::PackedPoint> packed;  // fast sampler: points with their cells
     detail::TriangleSet triangles;
-    std::vector<std::uint16_t> occupied;
+    std::vector<std::uint32_t> occupied;
     std::vector<std::uint8_t> visited;
     detail::TraceScratch trace;
     detail::TraceKernelTrials trials;  // EsfKernels::kBest: which tracer is fastest here

@@ -138,7 +138,7 @@ inline Axes setup_line(std::uint32_t start, std::uint32_t end) {
     return line;
 }
 
-inline std::uint16_t trace_one(const VoxelGrid& grid, std::uint32_t start, const Axes& line) {
+inline std::uint32_t trace_one(const VoxelGrid& grid, std::uint32_t start, const Axes& line) {
     std::uint32_t cell = start;
     std::int32_t e[3] = {line.error[0], line.error[1], line.error[2]};
     std::uint32_t occupied = 0;
@@ -150,7 +150,7 @@ inline std::uint16_t trace_one(const VoxelGrid& grid, std::uint32_t start, const
             e[k] += line.twice_length[k] - (line.twice_major & stepping);
         }
     }
-    return static_cast<std::uint16_t>(occupied);
+    return occupied;
 }
 
 /// For a counting sort by visited count: where the lines of each count start.
@@ -361,7 +361,7 @@ namespace popcnt {
 ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
                                           std::span<const std::uint32_t> starts,
                                           std::span<const std::uint32_t> ends,
-                                          std::span<std::uint16_t> occupied,
+                                          std::span<std::uint32_t> occupied,
                                           std::span<std::uint8_t> visited, TraceScratch& scratch,
                                           bool skip_known, bool with_popcnt) {
     visited_records_avx512(starts, ends, visited, scratch.records);
@@ -378,7 +378,7 @@ ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
 
 ESF_TARGET_AVX2 void trace_lines_avx2(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                                       std::span<const std::uint32_t> ends,
-                                      std::span<std::uint16_t> occupied,
+                                      std::span<std::uint32_t> occupied,
                                       std::span<std::uint8_t> visited, TraceScratch& scratch) {
     visited_scalar(starts, ends, visited);
     sort_by_length(visited, scratch);
@@ -450,7 +450,7 @@ ESF_TARGET_AVX2 void trace_lines_avx2(const VoxelGrid& grid, std::span<const std
         alignas(32) std::int32_t result[8];
         _mm256_store_si256(reinterpret_cast<__m256i*>(result), in);
         for (std::size_t k = 0; k < lanes; ++k)
-            occupied[scratch.order[group + k]] = static_cast<std::uint16_t>(result[k]);
+            occupied[scratch.order[group + k]] = static_cast<std::uint32_t>(result[k]);
     }
 }
 
@@ -469,7 +469,7 @@ Kernel best_kernel() {
 }  // namespace
 
 void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
-                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                        std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
                         std::span<std::uint8_t> visited) {
     assert(starts.size() == ends.size() && occupied.size() == starts.size());
     for (std::size_t i = 0; i < starts.size(); ++i) {
@@ -480,7 +480,7 @@ void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> st
 }
 
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
-                 std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                 std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
                  std::span<std::uint8_t> visited, TraceScratch& scratch, TraceKernel kernel,
                  LineEnds line_ends) {
     assert(starts.size() == ends.size() && occupied.size() == starts.size() &&

@@ -73,13 +73,13 @@ enum class TraceKernel { kBest, kAvx512, kAvx2, kScalar };
 /// cells visited. Picks the widest SIMD kernel the CPU has at run time (AVX-512, AVX2 or
 /// portable scalar) unless told otherwise; all kernels give identical counts.
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
-                 std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                 std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
                  std::span<std::uint8_t> visited, TraceScratch& scratch,
                  TraceKernel kernel = TraceKernel::kBest, LineEnds line_ends = LineEnds::kAny);
 
 /// The portable kernel.
 void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
-                        std::span<const std::uint32_t> ends, std::span<std::uint16_t> occupied,
+                        std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
                         std::span<std::uint8_t> visited);
 
 /// Name of the widest kernel this CPU runs ("avx512-popcnt", "avx512", "avx2" or "scalar").

@@ -171,7 +171,7 @@ ESF_CUBE_TARGET inline void unpack_lines(const std::uint64_t* record, __mmask16 
 /// Traces the sorted `records` (sort_lines()) through the cube table, 16 lines per group.
 ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::uint64_t* records,
                                   std::size_t count, const std::uint8_t* visited,
-                                  std::uint16_t* occupied, bool skip_known) {
+                                  std::uint32_t* occupied, bool skip_known) {
     const auto* cubes = reinterpret_cast<const int*>(cube_table);
     const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
     const __m512 three = _mm512_set1_ps(3.0f);
@@ -194,10 +194,7 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::ui
             for (; i < longest; i += 3, fi = _mm512_add_ps(fi, three))
                 trace_triple<kPerLane>(lanes, cubes, fi);
         }
-        alignas(64) std::uint32_t result[16], line[16];
-        _mm512_store_si512(result, lanes.occupied);
-        _mm512_store_si512(line, lines);
-        for (std::size_t k = 0; k < size; ++k)
-            occupied[line[k]] = static_cast<std::uint16_t>(result[k]);
+        _mm512_mask_i32scatter_epi32(occupied, static_cast<__mmask16>((1u << size) - 1u), lines,
+                                     lanes.occupied, 4);
     }
 }

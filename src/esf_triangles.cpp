@@ -332,7 +332,7 @@ struct HistogramBlock {
     alignas(64) std::uint32_t weight[3][kLanes];
 };
 
-void histogram_block_scalar(const TriangleSet& set, const std::uint16_t* occupied,
+void histogram_block_scalar(const TriangleSet& set, const std::uint32_t* occupied,
                             const std::uint8_t* visited, std::size_t first, std::size_t lanes,
                             bool pcl_division, float d2_scale, float d3_scale,
                             HistogramBlock& block) {
@@ -375,7 +375,7 @@ void histogram_block_scalar(const TriangleSet& set, const std::uint16_t* occupie
     }
 }
 
-ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std::uint16_t* occupied,
+ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std::uint32_t* occupied,
                                               const std::uint8_t* visited, std::size_t t,
                                               float d2_scale, float d3_scale,
                                               HistogramBlock& block) {
@@ -391,8 +391,7 @@ ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std:
     __m512i o[3], v[3];
     for (int k = 0; k < 3; ++k) {
         const std::size_t at = static_cast<std::size_t>(k) * s + t;
-        o[k] = _mm512_cvtepu16_epi32(
-            _mm256_loadu_si256(reinterpret_cast<const __m256i*>(occupied + at)));
+        o[k] = _mm512_loadu_si512(occupied + at);
         v[k] =
             _mm512_cvtepu8_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(visited + at)));
         const __mmask16 in = _mm512_cmpge_epi32_mask(_mm512_add_epi32(o[k], one), v[k]);
@@ -487,7 +486,7 @@ SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count
     return done;
 }
 
-EsfCounts histogram_triangles(const TriangleSet& set, const std::uint16_t* occupied,
+EsfCounts histogram_triangles(const TriangleSet& set, const std::uint32_t* occupied,
                               const std::uint8_t* visited, bool pcl_division, bool simd) {
     std::array<std::uint32_t, kCountBins> tally{};  // see kCopies
     // The fast sampler multiplies by the reciprocal of the maximum (a last-bit difference at a

@@ -72,7 +72,7 @@ int angle_bin(float angle);
 /// lines. `pcl_division`: bin D2 and D3 values as the reference does (d / max * 63) rather than
 /// by multiplying with 63 / max.
 using EsfCounts = std::array<std::array<std::uint32_t, kEsfBins>, kEsfBlocks>;
-EsfCounts histogram_triangles(const TriangleSet& triangles, const std::uint16_t* occupied,
+EsfCounts histogram_triangles(const TriangleSet& triangles, const std::uint32_t* occupied,
                               const std::uint8_t* visited, bool pcl_division, bool simd);
 
 }  // namespace esf::detail

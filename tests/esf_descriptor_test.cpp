@@ -273,7 +273,7 @@ TEST(LineTrace, FollowsHandComputedBresenhamCells) {
     grid.set(pack_cell(2, 0, 0));  // next to the line, not on it
     const std::uint32_t start[] = {pack_cell(0, 0, 0), pack_cell(5, 2, 0), pack_cell(7, 7, 7)};
     const std::uint32_t end[] = {pack_cell(5, 2, 0), pack_cell(5, 2, 0), pack_cell(7, 7, 7)};
-    std::uint16_t occupied[3];
+    std::uint32_t occupied[3];
     std::uint8_t visited[3];
     for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
                         esf::detail::TraceKernel::kAvx2, esf::detail::TraceKernel::kScalar}) {
@@ -301,7 +301,7 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
         starts[i] = pack_cell(coord(rng), coord(rng), coord(rng));
         ends[i] = i % 7 == 0 ? starts[i] : pack_cell(coord(rng), coord(rng), coord(rng));
     }
-    std::vector<std::uint16_t> expected(n), actual(n);
+    std::vector<std::uint32_t> expected(n), actual(n);
     std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
     esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
     for (auto kernel : kSimdKernels) {
@@ -367,7 +367,7 @@ void expect_kernel_matches_scalar(const esf::detail::VoxelGrid& grid, const Rand
                                   esf::detail::TraceKernel kernel, esf::detail::LineEnds ends_hint,
                                   esf::detail::TraceScratch& scratch, const std::string& context) {
     const std::size_t n = lines.starts.size();
-    std::vector<std::uint16_t> expected(n), actual(n);
+    std::vector<std::uint32_t> expected(n), actual(n);
     std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
     esf::detail::trace_lines_scalar(grid, lines.starts, lines.ends, expected, expected_visited);
     esf::detail::trace_lines(grid, lines.starts, lines.ends, actual, actual_visited, scratch,
