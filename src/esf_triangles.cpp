@@ -100,7 +100,6 @@ struct Block {
     std::uint32_t index[3][kLanes];
     std::uint32_t cell[3][kLanes];
     float a[kLanes], b[kLanes], c[kLanes], d3[kLanes];
-    std::uint32_t angle_bins[kLanes];
     std::uint32_t accepted = 0;  // lane mask
 };
 
@@ -123,19 +122,9 @@ void sample_block_scalar(Streams& streams, const PackedPoint* points, std::uint3
         const float heron = s * (s - a) * (s - b) * (s - c);
         const std::uint32_t i1 = block.index[0][l], i2 = block.index[1][l], i3 = block.index[2][l];
         if (i1 == i2 || i1 == i3 || i2 == i3 || !(heron > min_heron)) continue;
-        const float dot1 = x21 * x31 + y21 * y31 + z21 * z31;
-        const float dot3 = x23 * x31 + y23 * y31 + z23 * z31;
-        const float dot2 = x23 * x21 + y23 * y21 + z23 * z21;
-        const float inverse = 1.0f / (a * b * c);
-        const float angle1 = fast_acos(std::abs(dot1) * (c * inverse));
-        const float angle3 = fast_acos(std::abs(dot3) * (a * inverse));
-        const float angle2 = third_angle(angle1, angle3, dot1, dot3, dot2);
         block.accepted |= 1u << l;
         block.a[l] = a, block.b[l] = b, block.c[l] = c;
         block.d3[l] = std::sqrt(std::sqrt(heron));
-        block.angle_bins[l] = static_cast<std::uint32_t>(angle_bin(angle1)) |
-                              static_cast<std::uint32_t>(angle_bin(angle3)) << 8 |
-                              static_cast<std::uint32_t>(angle_bin(angle2)) << 16;
         block.cell[0][l] = p1.cell, block.cell[1][l] = p2.cell, block.cell[2][l] = p3.cell;
     }
 }
@@ -145,7 +134,6 @@ void commit_scalar(const Block& block, std::uint32_t keep, std::size_t at, Trian
     const std::size_t s = set.samples;
     for (int l = 0; l < kLanes; ++l) {
         if (!(keep >> l & 1)) continue;
-        set.angle_bins[at] = block.angle_bins[l];
         set.d2[at] = block.a[l], set.d2[s + at] = block.b[l], set.d2[2 * s + at] = block.c[l];
         set.d3[at] = block.d3[l];
         const std::uint32_t c1 = block.cell[0][l], c2 = block.cell[1][l], c3 = block.cell[2][l];
@@ -199,24 +187,48 @@ ESF_TARGET_AVX512 inline __m512 acos16(__m512 c) {
 }
 
 /// third_angle() on 16 lanes.
-ESF_TARGET_AVX512 inline __m512 third_angle16(__m512 angle1, __m512 angle3, __m512 dot1,
-                                              __m512 dot3, __m512 dot2) {
+ESF_TARGET_AVX512 inline __m512 third_angle16(__m512 angle1, __m512 angle3, __m512 n1, __m512 n3,
+                                              __m512 n2) {
     const __m512 zero = _mm512_setzero_ps();
     __m512 angle2 = _mm512_sub_ps(_mm512_sub_ps(_mm512_set1_ps(kPi), angle1), angle3);
-    angle2 = _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(dot3, zero, _CMP_GT_OQ),
+    angle2 = _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(n3, zero, _CMP_LT_OQ),
                                 _mm512_sub_ps(angle3, angle1));
-    angle2 = _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(dot1, zero, _CMP_LT_OQ),
+    angle2 = _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(n1, zero, _CMP_LT_OQ),
                                 _mm512_sub_ps(angle1, angle3));
-    return _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(dot2, zero, _CMP_LT_OQ),
+    return _mm512_mask_mov_ps(angle2, _mm512_cmp_ps_mask(n2, zero, _CMP_LT_OQ),
                               _mm512_add_ps(angle1, angle3));
 }
 
-/// angle_bin() on 16 lanes.
 ESF_TARGET_AVX512 inline __m512i angle_bin16(__m512 angle) {
     const __m512 t =
         _mm512_add_ps(_mm512_mul_ps(angle, _mm512_set1_ps(kBinsPerRadian)), _mm512_set1_ps(0.5f));
     return _mm512_min_epi32(_mm512_cvttps_epi32(t), _mm512_set1_epi32(kTopBin));
 }
+
+/// The A3 bins of triangles t .. t + 15 from their side lengths (triangle_angle_bins()).
+ESF_TARGET_AVX512 void angle_bins_avx512(TriangleSet& set, std::size_t t) {
+    const std::size_t s = set.samples;
+    const __m512 a = _mm512_loadu_ps(&set.d2[t]), b = _mm512_loadu_ps(&set.d2[s + t]);
+    const __m512 c = _mm512_loadu_ps(&set.d2[2 * s + t]);
+    const __m512 aa = _mm512_mul_ps(a, a), bb = _mm512_mul_ps(b, b), cc = _mm512_mul_ps(c, c);
+    const __m512 n1 = _mm512_sub_ps(_mm512_add_ps(aa, bb), cc);
+    const __m512 n3 = _mm512_sub_ps(_mm512_add_ps(bb, cc), aa);
+    const __m512 n2 = _mm512_sub_ps(_mm512_add_ps(aa, cc), bb);
+    const __m512 half_inverse =
+        _mm512_div_ps(_mm512_set1_ps(0.5f), _mm512_mul_ps(_mm512_mul_ps(a, b), c));
+    const __m512 sign = _mm512_set1_ps(-0.0f);
+    const __m512 angle1 =
+        acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, n1), _mm512_mul_ps(c, half_inverse)));
+    const __m512 angle3 =
+        acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, n3), _mm512_mul_ps(a, half_inverse)));
+    const __m512 angle2 = third_angle16(angle1, angle3, n1, n3, n2);
+    _mm512_storeu_si512(&set.angle_bins[t],
+                        _mm512_or_si512(_mm512_or_si512(angle_bin16(angle1),
+                                                        _mm512_slli_epi32(angle_bin16(angle3), 8)),
+                                        _mm512_slli_epi32(angle_bin16(angle2), 16)));
+}
+
+/// angle_bin() on 16 lanes.
 
 /// The x, y, z and cell of points[index[l]] for the 16 lanes, by four gathers.
 ESF_TARGET_AVX512 inline void gather16(const PackedPoint* points, __m512i index, __m512& x,
@@ -245,7 +257,6 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
     __m512i s2 = _mm512_load_si512(streams.s[2]), s3 = _mm512_load_si512(streams.s[3]);
     const __m512i n = _mm512_set1_epi32(static_cast<int>(count));
     const __m512 half = _mm512_set1_ps(0.5f), heron_min = _mm512_set1_ps(min_heron);
-    const __m512 sign = _mm512_set1_ps(-0.0f);
     __m512 max_d2 = _mm512_setzero_ps(), max_d3 = _mm512_setzero_ps();
     const std::size_t samples = set.samples;
     SampleCount done;
@@ -286,23 +297,9 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
             done.attempts += usable;
         }
         if (got == 0) continue;
-        const __m512 dot1 = dot16(x21, y21, z21, x31, y31, z31);
-        const __m512 dot3 = dot16(x23, y23, z23, x31, y31, z31);
-        const __m512 dot2 = dot16(x23, y23, z23, x21, y21, z21);
-        const __m512 inverse =
-            _mm512_div_ps(_mm512_set1_ps(1.0f), _mm512_mul_ps(_mm512_mul_ps(a, b), c));
-        const __m512 angle1 =
-            acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, dot1), _mm512_mul_ps(c, inverse)));
-        const __m512 angle3 =
-            acos16(_mm512_mul_ps(_mm512_andnot_ps(sign, dot3), _mm512_mul_ps(a, inverse)));
-        const __m512 angle2 = third_angle16(angle1, angle3, dot1, dot3, dot2);
-        const __m512i bins = _mm512_or_si512(
-            _mm512_or_si512(angle_bin16(angle1), _mm512_slli_epi32(angle_bin16(angle3), 8)),
-            _mm512_slli_epi32(angle_bin16(angle2), 16));
         const __m512 d3 = _mm512_sqrt_ps(_mm512_sqrt_ps(heron));
         const std::size_t at = done.accepted;
         const __mmask16 out = static_cast<__mmask16>((1u << got) - 1u);
-        put16(&set.angle_bins[at], keep, out, bins);
         put16(&set.d2[at], keep, out, a);
         put16(&set.d2[samples + at], keep, out, b);
         put16(&set.d2[2 * samples + at], keep, out, c);
@@ -447,11 +444,23 @@ float fast_acos(float c) {
     return std::sqrt(1.0f - x) * p;
 }
 
-float third_angle(float angle1, float angle3, float dot1, float dot3, float dot2) {
-    if (dot2 < 0.0f) return angle1 + angle3;  // obtuse at p2: pi - (pi - angle1 - angle3)
-    if (dot1 < 0.0f) return angle1 - angle3;  // obtuse at p1
-    if (dot3 > 0.0f) return angle3 - angle1;  // obtuse at p3
+float third_angle(float angle1, float angle3, float n1, float n3, float n2) {
+    if (n2 < 0.0f) return angle1 + angle3;  // obtuse at p2: pi - (pi - angle1 - angle3)
+    if (n1 < 0.0f) return angle1 - angle3;  // obtuse at p1
+    if (n3 < 0.0f) return angle3 - angle1;  // obtuse at p3
     return kPi - angle1 - angle3;
+}
+
+std::uint32_t triangle_angle_bins(float a, float b, float c) {
+    const float aa = a * a, bb = b * b, cc = c * c;
+    const float n1 = (aa + bb) - cc, n3 = (bb + cc) - aa, n2 = (aa + cc) - bb;
+    const float half_inverse = 0.5f / (a * b * c);
+    const float angle1 = fast_acos(std::abs(n1) * (c * half_inverse));
+    const float angle3 = fast_acos(std::abs(n3) * (a * half_inverse));
+    const float angle2 = third_angle(angle1, angle3, n1, n3, n2);
+    return static_cast<std::uint32_t>(angle_bin(angle1)) |
+           static_cast<std::uint32_t>(angle_bin(angle3)) << 8 |
+           static_cast<std::uint32_t>(angle_bin(angle2)) << 16;
 }
 
 int angle_bin(float angle) {
@@ -459,10 +468,10 @@ int angle_bin(float angle) {
     return std::min(static_cast<int>(angle * kBinsPerRadian + 0.5f), kTopBin);
 }
 
-SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count,
-                                  std::uint64_t seed, std::size_t max_attempts, float min_heron,
-                                  bool simd, TriangleSet& set) {
-    if (use_avx512(simd)) return sample_avx512(points, count, seed, max_attempts, min_heron, set);
+namespace {
+
+SampleCount sample_portable(const PackedPoint* points, std::uint32_t count, std::uint64_t seed,
+                            std::size_t max_attempts, float min_heron, TriangleSet& set) {
     Streams streams(seed);
     Block block;
     SampleCount done;
@@ -483,6 +492,25 @@ SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count
         commit_scalar(block, keep, done.accepted, set);
         done.accepted += static_cast<std::size_t>(got);
     }
+    return done;
+}
+
+}  // namespace
+
+SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count,
+                                  std::uint64_t seed, std::size_t max_attempts, float min_heron,
+                                  bool simd, TriangleSet& set) {
+    const SampleCount done =
+        use_avx512(simd) ? sample_avx512(points, count, seed, max_attempts, min_heron, set)
+                         : sample_portable(points, count, seed, max_attempts, min_heron, set);
+    // The angles, from the side lengths, in a pass of their own: its iterations are independent,
+    // whereas each block of the sampler waits on the previous one's count of accepted triples.
+    std::size_t t = 0;
+    if (use_avx512(simd))
+        for (; t + kLanes <= done.accepted; t += kLanes) angle_bins_avx512(set, t);
+    for (; t < done.accepted; ++t)
+        set.angle_bins[t] =
+            triangle_angle_bins(set.d2[t], set.d2[set.samples + t], set.d2[2 * set.samples + t]);
     return done;
 }
 

@@ -59,10 +59,14 @@ float fast_acos(float c);
 
 /// The fast sampler's third angle. A3 takes each angle of a triangle folded into [0, pi/2]
 /// (acos of |cos|). Of a triangle's three angles at most one is obtuse, so the folded angle at
-/// p2 follows from the folded angles at p1 and p3 without a third acos: the raw dot products
-/// tell which angle is obtuse (dot1 = (p2-p1).(p3-p1), dot3 = (p2-p3).(p3-p1),
-/// dot2 = (p2-p3).(p2-p1); obtuse at p1: dot1 < 0, at p3: dot3 > 0, at p2: dot2 < 0).
-float third_angle(float angle1, float angle3, float dot1, float dot3, float dot2);
+/// p2 follows from the folded angles at p1 and p3 without a third acos; n1, n3 and n2 have the
+/// signs of the cosines at p1, p3 and p2 (negative: obtuse there).
+float third_angle(float angle1, float angle3, float n1, float n3, float n2);
+
+/// The fast sampler's A3 bins of a triangle with sides a = |p1p2|, b = |p1p3|, c = |p2p3|, packed
+/// as TriangleSet::angle_bins: the cosines by the law of cosines (cos at p1 =
+/// (a^2 + b^2 - c^2) / 2ab), two angles by fast_acos(), the third by third_angle().
+std::uint32_t triangle_angle_bins(float a, float b, float c);
 
 /// A3 bin of a folded angle: round(angle / (pi/2) * 63), at most 63.
 int angle_bin(float angle);

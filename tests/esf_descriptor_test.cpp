@@ -460,34 +460,42 @@ TEST(LineTrace, SimdKernelsMatchScalarOnGroupsOfOneLength) {
 
 }  // namespace
 
-// The fast sampler's third angle against acos of the angle itself, on random triangles of every
-// kind (acute, right-ish, obtuse at each corner).
-TEST(EsfTriangles, ThirdAngleEqualsTheFoldedAngleAtP2) {
+// The fast sampler's angles against acos of the angles themselves, on random triangles of every
+// kind (acute, and obtuse at each corner).
+TEST(EsfTriangles, AngleBinsFromSideLengthsMatchTheAngles) {
     std::mt19937 rng(23);
     std::uniform_real_distribution<float> coordinate(-10.0f, 10.0f);
-    const auto folded = [](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
-        return std::acos(std::abs(u.dot(v)) / (u.norm() * v.norm()));
+    const auto folded_bin = [](const Eigen::Vector3f& from, const Eigen::Vector3f& to1,
+                               const Eigen::Vector3f& to2) {
+        const Eigen::Vector3d u = (to1 - from).cast<double>(), v = (to2 - from).cast<double>();
+        const double angle = std::acos(std::abs(u.dot(v)) / (u.norm() * v.norm()));
+        return angle / (std::acos(-1.0) / 2) * 63;  // the bin position before rounding
     };
-    int obtuse[3] = {0, 0, 0};
+    int obtuse[3] = {0, 0, 0}, compared = 0;
     for (int t = 0; t < 20000; ++t) {
         Eigen::Vector3f p1, p2, p3;
         for (int k = 0; k < 3; ++k) {
             p1[k] = coordinate(rng), p2[k] = coordinate(rng), p3[k] = coordinate(rng);
         }
-        const Eigen::Vector3f v21 = p2 - p1, v31 = p3 - p1, v23 = p2 - p3;
-        const float a = v21.norm(), b = v31.norm(), c = v23.norm();
+        const float a = (p2 - p1).norm(), b = (p3 - p1).norm(), c = (p2 - p3).norm();
         const float s = (a + b + c) / 2;
         if (s * (s - a) * (s - b) * (s - c) < 1.0f) continue;  // ESF rejects thin triangles
-        const float dot1 = v21.dot(v31), dot3 = v23.dot(v31), dot2 = v23.dot(v21);
-        const float angle1 = esf::detail::fast_acos(std::abs(dot1) / (a * b));
-        const float angle3 = esf::detail::fast_acos(std::abs(dot3) / (c * b));
-        const double at_p2 = folded((p1 - p2).cast<double>(), (p3 - p2).cast<double>());
-        ASSERT_NEAR(esf::detail::third_angle(angle1, angle3, dot1, dot3, dot2), at_p2, 2e-5)
-            << "triangle " << t;
-        obtuse[0] += dot1 < 0, obtuse[1] += dot2<0, obtuse[2] += dot3> 0;
-        EXPECT_NEAR(angle1, folded(v21.cast<double>(), v31.cast<double>()), 2e-5);
+        const std::uint32_t bins = esf::detail::triangle_angle_bins(a, b, c);
+        const double expected[3] = {folded_bin(p1, p2, p3), folded_bin(p3, p1, p2),
+                                    folded_bin(p2, p1, p3)};  // at p1, p3, p2
+        for (int k = 0; k < 3; ++k) {
+            const double position = expected[k];
+            if (std::abs(position - std::floor(position) - 0.5) < 1e-3) continue;  // a border
+            ASSERT_EQ(static_cast<double>(bins >> (8 * k) & 255), std::floor(position + 0.5))
+                << "triangle " << t << ", angle " << k;
+            ++compared;
+        }
+        obtuse[0] += (p2 - p1).dot(p3 - p1) < 0;
+        obtuse[1] += (p1 - p3).dot(p2 - p3) < 0;
+        obtuse[2] += (p1 - p2).dot(p3 - p2) < 0;
     }
-    for (int corner : obtuse) EXPECT_GT(corner, 100);  // every branch was taken
+    EXPECT_GT(compared, 20000);
+    for (int corner : obtuse) EXPECT_GT(corner, 100);  // every branch of third_angle() was taken
 }
 
 TEST(EsfTriangles, AngleBinsRoundToTheNearestOf64) {
