@@ -1,12 +1,16 @@
 // Google Benchmark of point-cloud reading in memory: one real cloud (a 640 x 480 mOSD scene with
 // labels, else a generated one) encoded as PCD ascii / binary / binary_compressed and as binary
-// PLY, then parsed from memory per iteration (no disk). Also the PCD writers and LZF alone.
+// PLY, then parsed from memory per iteration (no disk). Also the PCD writers and LZF alone:
+// compressing the columns, and decoding the binary_compressed block of real scenes as stored.
 
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <sstream>
 #include <string>
@@ -127,6 +131,69 @@ void BM_LzfCompressColumns(benchmark::State& state) {
                    std::to_string(static_cast<double>(raw.size()) / static_cast<double>(size)));
 }
 BENCHMARK(BM_LzfCompressColumns)->Unit(benchmark::kMillisecond);
+
+/// The LZF block of a real binary_compressed scene, as the file stores it after
+/// "DATA binary_compressed": compressed size, uncompressed size (uint32 each), then the stream.
+struct LzfBlock {
+    std::vector<unsigned char> packed;
+    std::size_t size = 0;  ///< bytes it decodes to
+    std::string problem;   ///< why there is no block; empty when there is one
+};
+
+LzfBlock scene_block(const std::string& name) {
+    LzfBlock block;
+    const auto file = esf::bench::data_dir() / "real/scenes" / name;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) {
+        block.problem = file.string() + " not found (set ESF_DATA to the shared data folder)";
+        return block;
+    }
+    const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const std::string tag = "\nDATA binary_compressed\n";
+    const std::size_t at = bytes.find(tag);
+    std::uint32_t sizes[2] = {0, 0};  // compressed, uncompressed
+    if (at == std::string::npos || bytes.size() - at - tag.size() < sizeof sizes) {
+        block.problem = file.string() + " is not binary_compressed";
+        return block;
+    }
+    std::memcpy(sizes, bytes.data() + at + tag.size(), sizeof sizes);
+    const std::size_t start = at + tag.size() + sizeof sizes;
+    if (bytes.size() - start < sizes[0]) {
+        block.problem = file.string() + ": LZF block cut off";
+        return block;
+    }
+    block.packed.assign(bytes.begin() + static_cast<std::ptrdiff_t>(start),
+                        bytes.begin() + static_cast<std::ptrdiff_t>(start + sizes[0]));
+    block.size = sizes[1];
+    return block;
+}
+
+/// lzf_decompress alone on a real scene's block (640 x 480 points); bytes/s counts the output.
+void BM_LzfDecompressScene(benchmark::State& state, const std::string& name) {
+    const LzfBlock block = scene_block(name);
+    if (!block.problem.empty()) {
+        state.SkipWithError(block.problem.c_str());
+        return;
+    }
+    std::vector<unsigned char> out(block.size);
+    const esf::detail::LzfDecoded first = esf::detail::lzf_decompress(block.packed, out);
+    if (first.error || first.produced != block.size) {
+        state.SkipWithError((name + ": LZF block does not decode").c_str());
+        return;
+    }
+    for (auto _ : state) {
+        const esf::detail::LzfDecoded decoded = esf::detail::lzf_decompress(block.packed, out);
+        benchmark::DoNotOptimize(decoded.produced);
+        benchmark::ClobberMemory();
+    }
+    state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(block.size));
+    state.SetLabel(std::to_string(block.packed.size() / 1024) + " KiB -> " +
+                   std::to_string(block.size / 1024) + " KiB");
+}
+BENCHMARK_CAPTURE(BM_LzfDecompressScene, mosd_learn0, std::string("mosd_learn0.pcd"))
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_LzfDecompressScene, mosd_learn20, std::string("mosd_learn20.pcd"))
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -1,6 +1,8 @@
 #include "lzf.hpp"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -21,6 +23,117 @@ constexpr int kHashBits = 14;
 inline std::uint32_t hash3(const unsigned char* p) {
     const std::uint32_t v = (std::uint32_t{p[0]} << 16) | (std::uint32_t{p[1]} << 8) | p[2];
     return (v * 2654435761u) >> (32 - kHashBits);
+}
+
+// ---- decoder helpers ----------------------------------------------------------------------------
+
+// The decoder's fast loop copies in fixed-size blocks that may run past a token's end (the next
+// token overwrites those bytes). It runs while the input holds a control byte and a 32-byte
+// literal copy, and the output holds what any token may write: at most max(32, len + 15) bytes
+// for a back reference of len bytes (see copy_far, copy_near), 32 for a literal run.
+constexpr std::size_t kFastInput = 1 + kMaxLiteral;
+constexpr std::size_t kFastOutput = kMaxMatch + 16;
+
+/// The bytes of v in reverse order (for big-endian hosts).
+constexpr std::uint64_t reverse_bytes(std::uint64_t v) {
+    std::uint64_t r = 0;
+    for (int k = 0; k < 8; ++k, v >>= 8) r = (r << 8) | (v & 0xff);
+    return r;
+}
+
+/// 8-byte load and store in little-endian order: byte k of the value is byte k in memory.
+inline std::uint64_t load64(const unsigned char* p) {
+    std::uint64_t v;
+    std::memcpy(&v, p, 8);
+    if constexpr (std::endian::native == std::endian::big) v = reverse_bytes(v);
+    return v;
+}
+
+inline void store64(unsigned char* p, std::uint64_t v) {
+    if constexpr (std::endian::native == std::endian::big) v = reverse_bytes(v);
+    std::memcpy(p, &v, 8);
+}
+
+/// A 64-bit value with its low n bytes set (n < 8).
+constexpr std::uint64_t low_bytes(std::size_t n) { return (std::uint64_t{1} << (8 * n)) - 1; }
+
+/// How the first 16 bytes of a back reference at distance d < 16 (which repeat the d bytes
+/// before it) are built in two 64-bit words from the two words at the reference, w0 and w1:
+///
+///   lo = (w0 & lo_mask) * lo_mul
+///   hi = (w1 & hi_mask) | (((lo >> down) & down_mask) * hi_mul)
+///
+/// For d < 8, lo_mask keeps the d bytes of the period and lo_mul repeats them across the word
+/// (the d-byte copies do not overlap, so the product has no carries); hi repeats the period from
+/// its phase at byte 8, r = 8 mod d, which lo holds at bytes r..r+d-1. For 8 <= d < 16, lo is w0
+/// itself; w1 gives bytes 8..d-1 and the rest start the period over (byte k is byte k - d: lo
+/// shifted up by d - 8 bytes, a multiplication by a power of two). The 16 bytes then repeat every
+/// `stride` bytes, the largest multiple of d up to 16.
+struct Repeat {
+    std::uint64_t lo_mask = 0, lo_mul = 0, hi_mask = 0, down_mask = 0, hi_mul = 0;
+    unsigned down = 0;
+    std::size_t stride = 0;
+};
+
+constexpr std::array<Repeat, 16> kRepeat = [] {
+    std::array<Repeat, 16> table{};
+    for (std::size_t d = 1; d < 16; ++d) {
+        Repeat& r = table[d];
+        r.stride = 16 - 16 % d;
+        if (d < 8) {
+            std::uint64_t spread = 0;
+            for (std::size_t shift = 0; shift < 64; shift += 8 * d)
+                spread |= std::uint64_t{1} << shift;
+            r.lo_mask = low_bytes(d);
+            r.lo_mul = spread;
+            r.down = static_cast<unsigned>(8 * (8 % d));
+            r.down_mask = low_bytes(d);
+            r.hi_mul = spread;
+        } else {
+            r.lo_mask = ~std::uint64_t{0};
+            r.lo_mul = 1;
+            r.hi_mask = low_bytes(d - 8);
+            r.down_mask = ~std::uint64_t{0};
+            r.hi_mul = std::uint64_t{1} << (8 * (d - 8));
+        }
+    }
+    return table;
+}();
+
+/// The first 8 bytes of the back reference at distance d >= 1: lo of Repeat for d < 8 (the bytes
+/// at op and after, not yet written, are masked off), the 8 bytes at the reference otherwise.
+inline std::uint64_t first_word(const unsigned char* op, std::size_t distance) {
+    const Repeat& r = kRepeat[std::min<std::size_t>(distance, 8)];
+    return (load64(op - distance) & r.lo_mask) * r.lo_mul;
+}
+
+/// Back reference of len >= 9 bytes at distance >= 16, in 16-byte blocks: each block's source
+/// ends at or before its destination, so it reads only bytes already final. The first two blocks
+/// are unconditional (most references are 32 bytes at most). Writes max(32, len + 15) bytes.
+inline void copy_far(unsigned char* op, std::size_t distance, std::size_t len) {
+    const unsigned char* ref = op - distance;
+    std::memcpy(op, ref, 16);
+    std::memcpy(op + 16, ref + 16, 16);
+    for (std::size_t k = 32; k < len; k += 16) std::memcpy(op + k, ref + k, 16);
+}
+
+/// Back reference of len >= 9 bytes at distance 1..15: its first 16 bytes, built in registers
+/// (see Repeat), stored every stride bytes; the first two stores are unconditional. Reads the 16
+/// bytes at op - distance (those not yet written are masked off); writes max(32, len + 15) bytes.
+inline void copy_near(unsigned char* op, std::size_t distance, std::size_t len) {
+    const Repeat& r = kRepeat[distance];
+    const unsigned char* ref = op - distance;
+    const std::uint64_t lo = (load64(ref) & r.lo_mask) * r.lo_mul;
+    const std::uint64_t hi =
+        (load64(ref + 8) & r.hi_mask) | (((lo >> r.down) & r.down_mask) * r.hi_mul);
+    store64(op, lo);
+    store64(op + 8, hi);
+    store64(op + r.stride, lo);
+    store64(op + r.stride + 8, hi);
+    for (std::size_t k = 2 * r.stride; k < len; k += r.stride) {
+        store64(op + k, lo);
+        store64(op + k + 8, hi);
+    }
 }
 
 }  // namespace
@@ -101,6 +214,46 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
         result.produced = static_cast<std::size_t>(op - out.data());
         return result;
     };
+
+    // Fast loop, while any token fits with room to spare on both sides: fixed-size copies (see
+    // kFastOutput), and only the distance of back references left to check. One branch per kind
+    // of token: literal run, short back reference (one 8-byte word), long back reference.
+    if (in.size() >= kFastInput && out.size() >= kFastOutput) {
+        const unsigned char* const in_fast_end = in_end - kFastInput;
+        unsigned char* const out_fast_end = out_end - kFastOutput;
+        while (ip <= in_fast_end && op <= out_fast_end) {
+            const std::size_t ctrl = *ip++;
+            if (ctrl < 32) {  // literal run of ctrl + 1 bytes: one 32-byte copy serves any length
+                std::memcpy(op, ip, kMaxLiteral);
+                op += ctrl + 1;
+                ip += ctrl + 1;
+                continue;
+            }
+            const std::size_t produced = static_cast<std::size_t>(op - out.data());
+            if (ctrl < (7 << 5)) {  // back reference of 3..8 bytes, no length byte
+                const std::size_t distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
+                if (distance > produced) {
+                    return corrupt("back reference before the start of the output");
+                }
+                store64(op, first_word(op, distance));
+                op += (ctrl >> 5) + 2;
+                continue;
+            }
+            const std::size_t len = 9 + std::size_t{*ip++};  // back reference of 9..264 bytes
+            const std::size_t distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
+            if (distance > produced) {
+                return corrupt("back reference before the start of the output");
+            }
+            if (distance >= 16) {
+                copy_far(op, distance, len);
+            } else {
+                copy_near(op, distance, len);
+            }
+            op += len;
+        }
+    }
+
+    // Careful loop for the last tokens (and small blocks): every length checked, exact copies.
     while (ip < in_end) {
         const std::size_t ctrl = *ip++;
         if (ctrl < 32) {  // literal run of ctrl + 1 bytes
@@ -110,14 +263,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
             if (static_cast<std::size_t>(out_end - op) < len) {
                 return corrupt("output exceeds stated size");
             }
-            // With room on both sides, one fixed 32-byte copy (a few vector moves) serves any
-            // run; the bytes past the run are overwritten by the next token.
-            if (static_cast<std::size_t>(in_end - ip) >= kMaxLiteral &&
-                static_cast<std::size_t>(out_end - op) >= kMaxLiteral) {
-                std::memcpy(op, ip, kMaxLiteral);
-            } else {
-                std::memcpy(op, ip, len);
-            }
+            std::memcpy(op, ip, len);
             op += len;
             ip += len;
             continue;
@@ -137,10 +283,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
             return corrupt("output exceeds stated size");
         }
         const unsigned char* ref = op - distance;
-        if (distance >= 16 && static_cast<std::size_t>(out_end - op) >= len + 16) {
-            // 16 bytes at a time: each block's source ends at or before its destination.
-            for (std::size_t k = 0; k < len; k += 16) std::memcpy(op + k, ref + k, 16);
-        } else if (distance >= len) {
+        if (distance >= len) {
             std::memcpy(op, ref, len);
         } else {
             // Overlapping: the output repeats the last `distance` bytes. Copy one period, then

@@ -31,7 +31,9 @@ struct LzfDecoded {
 };
 
 /// Decodes `in` into `out`. Bounds are checked on every token, so corrupt input reports an error
-/// instead of reading or writing out of range.
+/// instead of reading or writing out of range. Away from the ends of both buffers, tokens are
+/// copied in fixed-size blocks: bytes of `out` past `produced` may be overwritten, and bytes of
+/// `out` not yet written may be read (and discarded).
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out);
 
 }  // namespace esf::detail

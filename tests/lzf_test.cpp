@@ -1,5 +1,7 @@
 // LZF (src/lzf.cpp): round trips over awkward inputs, the worst-case bound, corrupt input, and
 // PCL's liblzf as the oracle both ways (PCL decodes what we encode; we decode what PCL encodes).
+// Hand-built token streams cover the decoder's fast loop and its edges: every short distance and
+// length, runs and literal runs at the very ends of exact-size buffers, every truncation.
 
 #include "lzf.hpp"
 
@@ -151,6 +153,250 @@ TEST(Lzf, PrefixesAndGarbageStayInBounds) {
         const auto r = lzf_decompress(garbage, room);
         ASSERT_LE(r.produced, room.size());
         ASSERT_LE(r.at, garbage.size());
+    }
+}
+
+/// LZF tokens built by hand, with the bytes they decode to.
+struct Stream {
+    Bytes packed, raw;
+
+    /// Literal runs (32 bytes at most each) of `bytes`.
+    Stream& literal(const Bytes& bytes) {
+        for (std::size_t i = 0; i < bytes.size(); i += 32) {
+            const std::size_t n = std::min<std::size_t>(32, bytes.size() - i);
+            packed.push_back(static_cast<unsigned char>(n - 1));
+            packed.insert(packed.end(), bytes.begin() + static_cast<long>(i),
+                          bytes.begin() + static_cast<long>(i + n));
+        }
+        raw.insert(raw.end(), bytes.begin(), bytes.end());
+        return *this;
+    }
+
+    /// The tokens of a back reference of `len` (3..264) bytes at `distance` (1..8192).
+    static Bytes reference_tokens(std::size_t distance, std::size_t len) {
+        const std::size_t code = len - 2, offset = distance - 1;
+        Bytes tokens;
+        if (code < 7) {
+            tokens.push_back(static_cast<unsigned char>((code << 5) | (offset >> 8)));
+        } else {
+            tokens.push_back(static_cast<unsigned char>((7 << 5) | (offset >> 8)));
+            tokens.push_back(static_cast<unsigned char>(code - 7));
+        }
+        tokens.push_back(static_cast<unsigned char>(offset & 0xff));
+        return tokens;
+    }
+
+    /// A back reference, decoded byte by byte.
+    Stream& reference(std::size_t distance, std::size_t len) {
+        const Bytes tokens = reference_tokens(distance, len);
+        packed.insert(packed.end(), tokens.begin(), tokens.end());
+        for (std::size_t k = 0; k < len; ++k) raw.push_back(raw[raw.size() - distance]);
+        return *this;
+    }
+};
+
+/// Decodes `packed` into `room` bytes followed by guard bytes, which must come back untouched
+/// (a write past the end, caught in any build); then from a buffer of exactly its size into one
+/// of exactly `room` bytes, so that sanitizer builds catch any read or write past either end.
+std::pair<esf::detail::LzfDecoded, Bytes> decode_exact(const Bytes& packed, std::size_t room) {
+    const Bytes in(packed);  // a copy holds exactly packed.size() bytes
+    constexpr std::size_t kGuard = 64;
+    Bytes guarded(room + kGuard, 0xa5);
+    const auto first = lzf_decompress(in, {guarded.data(), room});
+    const bool intact = std::all_of(guarded.begin() + static_cast<long>(room), guarded.end(),
+                                    [](unsigned char b) { return b == 0xa5; });
+    EXPECT_TRUE(intact) << "wrote past the end of the output";
+    if (!intact) return {first, Bytes{}};  // the exact-size run would corrupt the heap
+
+    Bytes out(room);
+    const auto decoded = lzf_decompress(in, out);
+    EXPECT_EQ(decoded.produced, first.produced);
+    out.resize(std::min(decoded.produced, room));
+    return {decoded, out};
+}
+
+/// True when `part` is a prefix of `whole`.
+bool is_prefix(const Bytes& part, const Bytes& whole) {
+    return part.size() <= whole.size() && std::equal(part.begin(), part.end(), whole.begin());
+}
+
+TEST(Lzf, RoundTripsRunsOfEveryPeriodNearBothEnds) {
+    // A run of period 1..20 (a back reference overlapping its own output, then references 264
+    // bytes back) between random bytes, right at the start or the end of the output or with
+    // room past it, so that it decodes in the fast loop, the careful one or across both.
+    std::vector<std::size_t> lengths;
+    for (std::size_t n = 1; n <= 40; ++n) lengths.push_back(n);
+    for (std::size_t n : {63, 64, 65, 100, 263, 264, 265, 266, 300, 528, 529, 600}) {
+        lengths.push_back(n);
+    }
+    const Bytes noise = random_bytes(1000, 11);
+    for (std::size_t period = 1; period <= 20; ++period) {
+        for (const std::size_t length : lengths) {
+            for (const std::size_t before : {0, 1, 9, 300}) {
+                for (const std::size_t after : {0, 1, 5, 33, 300}) {
+                    Bytes raw(noise.begin(), noise.begin() + static_cast<long>(before));
+                    for (std::size_t k = 0; k < length; ++k) {
+                        raw.push_back(static_cast<unsigned char>(200 + k % period));
+                    }
+                    raw.insert(raw.end(), noise.end() - static_cast<long>(after), noise.end());
+                    const auto [decoded, out] = decode_exact(compress(raw), raw.size());
+                    ASSERT_EQ(decoded.error, nullptr)
+                        << "period " << period << ", length " << length << ", " << before
+                        << " bytes before, " << after << " after: " << decoded.error;
+                    ASSERT_EQ(out, raw) << "period " << period << ", length " << length << ", "
+                                        << before << " bytes before, " << after << " after";
+                }
+            }
+        }
+    }
+}
+
+TEST(Lzf, DecodesBackReferencesOfEveryDistanceAndLength) {
+    // Every distance 1..40 and length 3..264, built by hand, with 0..300 bytes of output after
+    // the reference: at the very end of an exact-size output, or inside the fast loop.
+    const Bytes noise = random_bytes(340, 12);
+    const Bytes prefix(noise.begin(), noise.begin() + 40);
+    for (std::size_t distance = 1; distance <= 40; ++distance) {
+        for (std::size_t len = 3; len <= 264; ++len) {
+            for (const std::size_t after : {0, 1, 15, 16, 17, 300}) {
+                Stream s;
+                s.literal(prefix).reference(distance, len);
+                s.literal(Bytes(noise.end() - static_cast<long>(after), noise.end()));
+                const auto [decoded, out] = decode_exact(s.packed, s.raw.size());
+                ASSERT_EQ(decoded.error, nullptr) << "distance " << distance << ", length " << len
+                                                  << ", " << after << " after: " << decoded.error;
+                ASSERT_EQ(out, s.raw)
+                    << "distance " << distance << ", length " << len << ", " << after << " after";
+            }
+        }
+    }
+}
+
+TEST(Lzf, DecodesLiteralRunsOfEveryLengthAtTheVeryEnd) {
+    // A last literal run of 1..32 bytes ending both the input and the exact-size output, after
+    // 0..320 bytes of output (and a back reference), so that the switch from the fast loop to
+    // the careful one falls before, on and after it.
+    const Bytes noise = random_bytes(400, 13);
+    for (std::size_t before = 0; before <= 320; ++before) {
+        for (std::size_t n = 1; n <= 32; ++n) {
+            Stream s;
+            s.literal(Bytes(noise.begin(), noise.begin() + static_cast<long>(before)));
+            if (before >= 8) s.reference(8, 5);
+            s.literal(Bytes(noise.end() - static_cast<long>(n), noise.end()));
+            const auto [decoded, out] = decode_exact(s.packed, s.raw.size());
+            ASSERT_EQ(decoded.error, nullptr) << before << " bytes before a run of " << n;
+            ASSERT_EQ(out, s.raw) << before << " bytes before a run of " << n;
+        }
+    }
+}
+
+/// A block of every kind of token, decoded in the fast loop but for its last tokens.
+Stream every_token() {
+    const Bytes noise = random_bytes(2000, 14);
+    Stream s;
+    std::size_t used = 0;
+    auto literal = [&](std::size_t n) {
+        s.literal(Bytes(noise.begin() + static_cast<long>(used),
+                        noise.begin() + static_cast<long>(used + n)));
+        used += n;
+    };
+    literal(40);
+    for (const std::size_t distance : {1, 3, 4, 8, 12, 16, 20, 40, 300}) {
+        for (const std::size_t len : {3, 4, 8, 9, 16, 17, 33, 100, 264}) {
+            s.reference(distance, len);
+            literal(1 + (distance + len) % 32);
+        }
+    }
+    literal(32);
+    s.reference(5, 3);
+    return s;
+}
+
+TEST(Lzf, EveryTruncationIsAnErrorOrAPrefix) {
+    const Stream s = every_token();
+    ASSERT_GT(s.raw.size(), 5000u);
+    // The input cut at every byte: a clean prefix of the output, or an error with a correct
+    // prefix before it.
+    for (std::size_t n = 0; n <= s.packed.size(); ++n) {
+        const Bytes cut(s.packed.begin(), s.packed.begin() + static_cast<long>(n));
+        const auto [decoded, out] = decode_exact(cut, s.raw.size());
+        ASSERT_LE(decoded.produced, s.raw.size()) << n;
+        ASSERT_LE(decoded.at, n) << n;
+        ASSERT_TRUE(is_prefix(out, s.raw)) << "input cut to " << n << " bytes";
+        if (n == s.packed.size()) {
+            ASSERT_EQ(decoded.error, nullptr);
+            ASSERT_EQ(out, s.raw);
+        }
+    }
+    // The output cut at every byte: an error once a token no longer fits.
+    for (std::size_t room = 0; room < s.raw.size(); ++room) {
+        const auto [decoded, out] = decode_exact(s.packed, room);
+        ASSERT_STREQ(decoded.error, "output exceeds stated size") << "room " << room;
+        ASSERT_LE(decoded.produced, room);
+        ASSERT_TRUE(is_prefix(out, s.raw)) << "room " << room;
+    }
+}
+
+TEST(Lzf, BackReferencesBeforeTheStartAreReportedInTheFastLoop) {
+    // With plenty of room on both sides, a reference one byte too far (or more) is caught, short
+    // form or long, and one to the very first byte is not.
+    const Bytes noise = random_bytes(100, 15);
+    Stream head, tail;
+    head.literal(Bytes(noise.begin(), noise.begin() + 10));  // 11 bytes of input
+    tail.literal(Bytes(noise.begin() + 10, noise.end()));
+    for (const std::size_t len : {3, 8, 9, 264}) {
+        for (const std::size_t distance : {1, 10, 11, 12, 100, 8192}) {
+            const Bytes reference = Stream::reference_tokens(distance, len);
+            Bytes packed = head.packed;
+            packed.insert(packed.end(), reference.begin(), reference.end());
+            packed.insert(packed.end(), tail.packed.begin(), tail.packed.end());
+            const auto [decoded, out] = decode_exact(packed, 4096);
+            if (distance <= 10) {
+                Stream valid = head;
+                valid.reference(distance, len).literal(tail.raw);
+                EXPECT_EQ(decoded.error, nullptr);
+                EXPECT_EQ(out, valid.raw);
+            } else {
+                EXPECT_STREQ(decoded.error, "back reference before the start of the output")
+                    << "distance " << distance << ", length " << len;
+                EXPECT_EQ(decoded.at, head.packed.size() + reference.size());
+                EXPECT_EQ(decoded.produced, 10u);
+            }
+        }
+    }
+}
+
+TEST(Lzf, RandomTokensDecodeAndDamagedOnesStayInBounds) {
+    // Streams of random tokens (literal runs, back references near and far, short and long)
+    // decode to what they were built from; with a few bytes changed and into a room of any size,
+    // they decode without going past either end (sanitizer builds check every access).
+    std::mt19937 gen(16);
+    for (int trial = 0; trial < 500; ++trial) {
+        Stream s;
+        const std::size_t tokens = 1 + gen() % 200;
+        for (std::size_t k = 0; k < tokens; ++k) {
+            if (s.raw.empty() || gen() % 3 == 0) {
+                s.literal(random_bytes(1 + gen() % 32, static_cast<std::uint32_t>(gen())));
+                continue;
+            }
+            const std::size_t reach = std::min<std::size_t>(s.raw.size(), 8192);
+            const std::size_t distance =
+                1 + gen() % (gen() % 2 ? std::min<std::size_t>(reach, 20) : reach);
+            const std::size_t len = 3 + gen() % (gen() % 2 ? 14 : 262);
+            s.reference(distance, len);
+        }
+        const auto [decoded, out] = decode_exact(s.packed, s.raw.size());
+        ASSERT_EQ(decoded.error, nullptr) << "trial " << trial;
+        ASSERT_EQ(out, s.raw) << "trial " << trial;
+
+        Bytes damaged = s.packed;
+        for (int k = 0; k < 3; ++k) {
+            damaged[gen() % damaged.size()] = static_cast<unsigned char>(gen());
+        }
+        const std::size_t room = gen() % (s.raw.size() + 300);
+        const auto [damaged_decoded, damaged_out] = decode_exact(damaged, room);
+        ASSERT_LE(damaged_decoded.produced, room) << "trial " << trial;
+        ASSERT_LE(damaged_decoded.at, damaged.size()) << "trial " << trial;
     }
 }
 
