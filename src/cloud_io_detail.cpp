@@ -233,6 +233,15 @@ void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
         }
         return;
     }
+    const bool float_columns = !swap && c.type[0] == Scalar::kF32 && c.type[1] == Scalar::kF32 &&
+                               c.type[2] == Scalar::kF32 && c.stride[0] == 4 && c.stride[1] == 4 &&
+                               c.stride[2] == 4;
+    if (float_columns) {  // binary_compressed PCD: x, y and z as three columns, one pass
+        float* out = points.data()->data();
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t a = 0; a < 3; ++a) std::memcpy(out + 3 * i + a, c.src[a] + 4 * i, 4);
+        return;
+    }
     for (int axis = 0; axis < 3; ++axis) {
         const auto a = static_cast<std::size_t>(axis);
         if (swap) {

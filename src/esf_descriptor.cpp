@@ -32,6 +32,7 @@ constexpr float kMinHeronProduct = 0.001f;  // s(s-a)(s-b)(s-c) in grid units (s
 struct EsfEstimator::Workspace {
     detail::VoxelGrid grid;
     Points scaled;
+    Points finite;                            // the finite input points, when some are not
     std::vector<std::uint32_t> cells;         // pcl sampler: cell of each point
     std::vector<detail::PackedPoint> packed;  // fast sampler: points with their cells
     detail::TriangleSet triangles;
@@ -234,7 +235,6 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     NormaliseOutcome normalised = NormaliseOutcome::kNonFinite;
     if (!pcl && input.size() >= 3)
         normalised = detail::normalise_points(input, half, avx512, normalisation);
-    FinitePoints finite;
     std::span<const Eigen::Vector3f> points = input;
     const bool all_finite =
         !pcl && input.size() >= 3
@@ -242,9 +242,8 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
             : std::all_of(input.begin(), input.end(),
                           [](const Eigen::Vector3f& p) { return p.allFinite(); });
     if (!all_finite) {
-        finite = drop_non_finite(input);
-        points = finite.points;
-        result.dropped_points = finite.dropped;
+        result.dropped_points = drop_non_finite(input, ws.finite);
+        points = ws.finite;
         if (!pcl && points.size() >= 3)
             normalised = detail::normalise_points(points, half, avx512, normalisation);
     }

@@ -6,15 +6,16 @@ namespace esf {
 
 FinitePoints drop_non_finite(std::span<const Eigen::Vector3f> points) {
     FinitePoints out;
-    out.points.reserve(points.size());
-    for (const auto& p : points) {
-        if (p.allFinite()) {
-            out.points.push_back(p);
-        } else {
-            ++out.dropped;
-        }
-    }
+    out.dropped = drop_non_finite(points, out.points);
     return out;
+}
+
+std::size_t drop_non_finite(std::span<const Eigen::Vector3f> points, Points& finite) {
+    finite.clear();
+    finite.reserve(points.size());
+    for (const auto& p : points)
+        if (p.allFinite()) finite.push_back(p);
+    return points.size() - finite.size();
 }
 
 std::string file_message(const std::string& path, std::size_t line, const std::string& reason) {

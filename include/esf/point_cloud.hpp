@@ -32,4 +32,7 @@ struct FinitePoints {
 /// Keeps the points whose three coordinates are finite (NaN and +-inf are dropped).
 FinitePoints drop_non_finite(std::span<const Eigen::Vector3f> points);
 
+/// The same into `finite` (replaced; its memory is reused): returns how many were dropped.
+std::size_t drop_non_finite(std::span<const Eigen::Vector3f> points, Points& finite);
+
 }  // namespace esf
