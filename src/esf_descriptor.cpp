@@ -227,14 +227,14 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
 
     const int half = opt.grid_size / 2;
     const bool pcl = opt.sampler == EsfSampler::kPcl;
-    const bool avx512 = opt.kernels == EsfKernels::kBest;  // where the CPU has it
+    const detail::SimdLevel simd = detail::simd_level(opt.kernels);
     // The fast sampler's centring pass reveals non-finite points for free; the pcl sampler
     // checks every point first.
     using detail::NormaliseOutcome;
     detail::Normalisation normalisation;
     NormaliseOutcome normalised = NormaliseOutcome::kNonFinite;
     if (!pcl && input.size() >= 3)
-        normalised = detail::normalise_points(input, half, avx512, normalisation);
+        normalised = detail::normalise_points(input, half, simd, normalisation);
     std::span<const Eigen::Vector3f> points = input;
     const bool all_finite =
         !pcl && input.size() >= 3
@@ -245,7 +245,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         result.dropped_points = drop_non_finite(input, ws.finite);
         points = ws.finite;
         if (!pcl && points.size() >= 3)
-            normalised = detail::normalise_points(points, half, avx512, normalisation);
+            normalised = detail::normalise_points(points, half, simd, normalisation);
     }
     result.points = points.size();
     if (points.size() < 3)
@@ -288,10 +288,10 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
         // One pass: scaled point, its cell, the grid and the moments for the collinearity test
         // (the scaled points are centred, so raw moments lose nothing).
         const Eigen::Matrix3d covariance = detail::voxelise_points(
-            points, normalisation, half, avx512, ws.packed, ws.cells, ws.grid);
+            points, normalisation, half, simd, ws.packed, ws.cells, ws.grid);
         if (collinear(covariance)) throw on_one_line();
     }
-    ws.grid.dilate(opt.grid_size, avx512);
+    ws.grid.dilate(opt.grid_size, simd == detail::SimdLevel::kAvx512);
 
     // Random triples (Sec. III-C): `samples` accepted, degenerate ones redrawn.
     const auto samples = static_cast<std::size_t>(opt.samples);
@@ -321,7 +321,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     } else {
         const detail::SampleCount count =
             detail::sample_triangles_fast(ws.packed.data(), static_cast<std::uint32_t>(n), opt.seed,
-                                          max_attempts, kMinHeronProduct, avx512, triangles);
+                                          max_attempts, kMinHeronProduct, simd, triangles);
         accepted = count.accepted;
         attempts = count.attempts;
         if (accepted < samples) throw_degenerate(n, accepted, max_attempts);
@@ -348,7 +348,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     // Histograms, counted in integers: every value the reference accumulates in float is a
     // multiple of 1/32 far below 2^24 / 32, so integer sums converted at the end are identical.
     const detail::EsfCounts h =
-        detail::histogram_triangles(triangles, ws.occupied.data(), ws.visited.data(), pcl, avx512);
+        detail::histogram_triangles(triangles, ws.occupied.data(), ws.visited.data(), pcl, simd);
     constexpr int kA3Mixed = 2;
 
     // Block weights of the reference, then L1 normalisation (float, in output order).

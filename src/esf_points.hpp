@@ -2,13 +2,14 @@
 // Internal: the per-point passes of the fast ESF sampler. The points are centred and scaled so
 // that the farthest lies at radius `half` (Sec. III-A), and their cells are set in the voxel
 // grid (Sec. III-B). Sums run in 16 lane-wise partial sums of doubles (point i in lane i % 16),
-// reduced in lane order, so the AVX-512 kernels and the portable code agree bit for bit.
+// reduced in lane order, so the AVX-512 and AVX2 kernels and the portable code agree bit for bit.
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#include "esf_simd.hpp"
 #include "esf_trace.hpp"
 #include "esf_triangles.hpp"
 
@@ -37,14 +38,14 @@ enum class NormaliseOutcome {
 };
 
 /// Centre and scale of the points; `out` is valid when kNormalised.
-NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int half, bool simd,
+NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int half, SimdLevel simd,
                                   Normalisation& out);
 
 /// Scales every point, stores it with its cell in `packed` (plus one zero padding point) and
 /// `cells`, and sets the cells in `grid` (not cleared first). Returns the covariance of the scaled
 /// points, times their count.
 Eigen::Matrix3d voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisation& t,
-                                int half, bool simd, std::vector<PackedPoint>& packed,
+                                int half, SimdLevel simd, std::vector<PackedPoint>& packed,
                                 std::vector<std::uint32_t>& cells, VoxelGrid& grid);
 
 }  // namespace esf::detail

@@ -187,8 +187,6 @@ void visited_scalar(std::span<const std::uint32_t> starts, std::span<const std::
         visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
 }
 
-#define ESF_TARGET_AVX2 __attribute__((target("avx2,bmi2")))
-
 // A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
 constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
 constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
@@ -461,8 +459,7 @@ Kernel best_kernel() {
         __builtin_cpu_init();
         return __builtin_cpu_supports("avx512vpopcntdq") ? Kernel::kAvx512Popcnt : Kernel::kAvx512;
     }
-    __builtin_cpu_init();
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi2")) return Kernel::kAvx2;
+    if (esf_avx2_available()) return Kernel::kAvx2;
     return Kernel::kScalar;
 }
 

@@ -3,8 +3,8 @@
 //
 // The fast sampler draws attempts in blocks of 16, one per lane of 16 xoshiro128++ streams
 // (seeded from the one 64-bit seed by SplitMix64): attempt 16 b + l takes three draws of stream
-// l. The AVX-512 kernel and the portable code perform the same float operations in the same
-// order, so both give the same triangles, bit for bit, on every machine.
+// l. The AVX-512 and AVX2 kernels and the portable code perform the same float operations in the
+// same order, so both give the same triangles, bit for bit, on every machine.
 
 #include <array>
 #include <cstddef>
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "esf/esf_descriptor.hpp"
+#include "esf_simd.hpp"
 
 namespace esf::detail {
 
@@ -51,7 +52,7 @@ struct SampleCount {
 /// indices coincide or its Heron product s(s-a)(s-b)(s-c) is at most `min_heron`.
 SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count,
                                   std::uint64_t seed, std::size_t max_attempts, float min_heron,
-                                  bool simd, TriangleSet& triangles);
+                                  SimdLevel simd, TriangleSet& triangles);
 
 /// acos(c) for c in [0, 1] (larger values count as 1) from a polynomial (Abramowitz & Stegun
 /// 4.4.46, error 2e-8): the fast sampler's angles.
@@ -77,6 +78,6 @@ int angle_bin(float angle);
 /// by multiplying with 63 / max.
 using EsfCounts = std::array<std::array<std::uint32_t, kEsfBins>, kEsfBlocks>;
 EsfCounts histogram_triangles(const TriangleSet& triangles, const std::uint32_t* occupied,
-                              const std::uint8_t* visited, bool pcl_division, bool simd);
+                              const std::uint8_t* visited, bool pcl_division, SimdLevel simd);
 
 }  // namespace esf::detail

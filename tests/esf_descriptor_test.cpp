@@ -131,19 +131,75 @@ TEST(EsfDescriptor, PoolGivesTheEstimatorsResultFromConcurrentCallers) {
     EXPECT_EQ(pool.compute(clouds[0]).descriptor, got[0]);
 }
 
+/// Descriptors and attempts of kAvx2 and kPortable against kBest's.
+void expect_kernels_agree(const esf::Points& points, const esf::EsfOptions& best,
+                          const std::string& what) {
+    const auto a = esf::compute_esf(points, best);
+    for (const esf::EsfKernels kernels : {esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
+        esf::EsfOptions other = best;
+        other.kernels = kernels;
+        const auto b = esf::compute_esf(points, other);
+        EXPECT_EQ(a.descriptor, b.descriptor) << what << " " << to_string(kernels);
+        EXPECT_EQ(a.attempts, b.attempts) << what << " " << to_string(kernels);
+        EXPECT_EQ(a.dropped_points, b.dropped_points) << what << " " << to_string(kernels);
+    }
+}
+
 TEST(EsfDescriptor, PortableCodeGivesTheSimdKernelsOutput) {
     const auto points = partial_cylinder(5000);
     for (std::uint64_t seed : {0u, 1u, 99u}) {
         esf::EsfOptions best;
         best.seed = seed;
-        const auto a = esf::compute_esf(points, best);
-        for (const esf::EsfKernels kernels : {esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
-            esf::EsfOptions other = best;
-            other.kernels = kernels;
-            const auto b = esf::compute_esf(points, other);
-            EXPECT_EQ(a.descriptor, b.descriptor) << "seed " << seed << " " << to_string(kernels);
-            EXPECT_EQ(a.attempts, b.attempts) << "seed " << seed << " " << to_string(kernels);
-        }
+        expect_kernels_agree(points, best, "seed " + std::to_string(seed));
+    }
+}
+
+TEST(EsfDescriptor, PortableCodeGivesTheSimdKernelsOutputForOtherSizes) {
+    // Point counts that leave partial blocks of 8 and 16 points; sample counts whose last block
+    // of attempts is partial; grids other than 64.
+    for (const std::size_t count : {std::size_t{37}, std::size_t{1000}, std::size_t{5003}})
+        for (const int samples : {100, 1000, 1001, 20000})
+            for (const int grid : {32, 40, 64}) {
+                esf::EsfOptions best;
+                best.samples = samples;
+                best.grid_size = grid;
+                best.seed = count + static_cast<std::size_t>(samples);
+                expect_kernels_agree(partial_cylinder(count, 7), best,
+                                     std::to_string(count) + " points, " + std::to_string(samples) +
+                                         " samples, grid " + std::to_string(grid));
+            }
+}
+
+TEST(EsfDescriptor, PortableCodeGivesTheSimdKernelsOutputWithNonFinitePoints) {
+    esf::Points points = partial_cylinder(3001, 11);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    points[3] = {nan, 0, 0};
+    points[40] = {0, -inf, 0};
+    points.push_back({0, 0, inf});
+    for (const int samples : {100, 1000, 20000}) {
+        esf::EsfOptions best;
+        best.samples = samples;
+        expect_kernels_agree(points, best, std::to_string(samples) + " samples");
+    }
+}
+
+TEST(EsfDescriptor, KernelsAgreeWhenTheAttemptsRunOut) {
+    // Few points far from a line: many triples are degenerate, and the attempts run out.
+    esf::Points points(40, Eigen::Vector3f::Zero());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        points[i] = {static_cast<float>(i), 0.0f, i % 13 == 0 ? 1.0f : 0.0f};
+    esf::EsfOptions options;
+    options.samples = 1000;
+    options.max_attempts_per_sample = 1;
+    std::string first;
+    for (const esf::EsfKernels kernels :
+         {esf::EsfKernels::kBest, esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
+        options.kernels = kernels;
+        const std::string error = error_of(points, options);
+        EXPECT_THAT(error, HasSubstr("non-degenerate triangles in 1000 random triples"));
+        if (first.empty()) first = error;
+        EXPECT_EQ(error, first) << to_string(kernels);
     }
 }
 
