@@ -33,7 +33,8 @@ struct LzfDecoded {
 /// Decodes `in` into `out`. Bounds are checked on every token, so corrupt input reports an error
 /// instead of reading or writing out of range. Away from the ends of both buffers, tokens are
 /// copied in fixed-size blocks: bytes of `out` past `produced` may be overwritten, and bytes of
-/// `out` not yet written may be read (and discarded).
+/// `out` not yet written may be read (and masked off), so `out` should be initialised memory
+/// (the PCD reader passes zeroed pages from calloc, which cost nothing).
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out);
 
 }  // namespace esf::detail
