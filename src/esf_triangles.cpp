@@ -262,31 +262,59 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
     __m512 max_d2 = _mm512_setzero_ps(), max_d3 = _mm512_setzero_ps();
     const std::size_t samples = set.samples;
     SampleCount done;
-    while (done.accepted < samples && done.attempts < max_attempts) {
-        const __m512i i1 = bounded16(next16(s0, s1, s2, s3), n);
-        const __m512i i2 = bounded16(next16(s0, s1, s2, s3), n);
-        const __m512i i3 = bounded16(next16(s0, s1, s2, s3), n);
+    // Blocks go through three stages, each a block ahead of the next: indices and points drawn,
+    // then the triangles' shape and acceptance, then the bookkeeping and stores. A block's long
+    // chain of dependent steps (gathers, square roots, Heron's product) then overlaps the
+    // previous blocks' work instead of holding up the loop.
+    struct Drawn {
+        __m512i i1, i2, i3, c1, c2, c3;
         __m512 x1, y1, z1, x2, y2, z2, x3, y3, z3;
+    };
+    struct Shaped {
         __m512i c1, c2, c3;
-        gather16(points, i1, x1, y1, z1, c1);
-        gather16(points, i2, x2, y2, z2, c2);
-        gather16(points, i3, x3, y3, z3, c3);
-        const __m512 x21 = _mm512_sub_ps(x2, x1), y21 = _mm512_sub_ps(y2, y1),
-                     z21 = _mm512_sub_ps(z2, z1);
-        const __m512 x31 = _mm512_sub_ps(x3, x1), y31 = _mm512_sub_ps(y3, y1),
-                     z31 = _mm512_sub_ps(z3, z1);
-        const __m512 x23 = _mm512_sub_ps(x2, x3), y23 = _mm512_sub_ps(y2, y3),
-                     z23 = _mm512_sub_ps(z2, z3);
-        const __m512 a = _mm512_sqrt_ps(dot16(x21, y21, z21, x21, y21, z21));
-        const __m512 b = _mm512_sqrt_ps(dot16(x31, y31, z31, x31, y31, z31));
-        const __m512 c = _mm512_sqrt_ps(dot16(x23, y23, z23, x23, y23, z23));
-        const __m512 s = _mm512_mul_ps(_mm512_add_ps(_mm512_add_ps(a, b), c), half);
-        const __m512 heron =
-            _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(s, _mm512_sub_ps(s, a)), _mm512_sub_ps(s, b)),
-                          _mm512_sub_ps(s, c));
-        __mmask16 keep = _mm512_cmp_ps_mask(heron, heron_min, _CMP_GT_OQ) &
-                         _mm512_cmpneq_epi32_mask(i1, i2) & _mm512_cmpneq_epi32_mask(i1, i3) &
-                         _mm512_cmpneq_epi32_mask(i2, i3);
+        __m512 a, b, c, heron;
+        __mmask16 keep;
+    };
+    const auto draw = [&]() ESF_TARGET_AVX512 {
+        Drawn d;
+        d.i1 = bounded16(next16(s0, s1, s2, s3), n);
+        d.i2 = bounded16(next16(s0, s1, s2, s3), n);
+        d.i3 = bounded16(next16(s0, s1, s2, s3), n);
+        gather16(points, d.i1, d.x1, d.y1, d.z1, d.c1);
+        gather16(points, d.i2, d.x2, d.y2, d.z2, d.c2);
+        gather16(points, d.i3, d.x3, d.y3, d.z3, d.c3);
+        return d;
+    };
+    const auto shape = [&](const Drawn& d) ESF_TARGET_AVX512 {
+        Shaped t;
+        t.c1 = d.c1, t.c2 = d.c2, t.c3 = d.c3;
+        const __m512 x21 = _mm512_sub_ps(d.x2, d.x1), y21 = _mm512_sub_ps(d.y2, d.y1),
+                     z21 = _mm512_sub_ps(d.z2, d.z1);
+        const __m512 x31 = _mm512_sub_ps(d.x3, d.x1), y31 = _mm512_sub_ps(d.y3, d.y1),
+                     z31 = _mm512_sub_ps(d.z3, d.z1);
+        const __m512 x23 = _mm512_sub_ps(d.x2, d.x3), y23 = _mm512_sub_ps(d.y2, d.y3),
+                     z23 = _mm512_sub_ps(d.z2, d.z3);
+        t.a = _mm512_sqrt_ps(dot16(x21, y21, z21, x21, y21, z21));
+        t.b = _mm512_sqrt_ps(dot16(x31, y31, z31, x31, y31, z31));
+        t.c = _mm512_sqrt_ps(dot16(x23, y23, z23, x23, y23, z23));
+        const __m512 s = _mm512_mul_ps(_mm512_add_ps(_mm512_add_ps(t.a, t.b), t.c), half);
+        t.heron = _mm512_mul_ps(
+            _mm512_mul_ps(_mm512_mul_ps(s, _mm512_sub_ps(s, t.a)), _mm512_sub_ps(s, t.b)),
+            _mm512_sub_ps(s, t.c));
+        t.keep = _mm512_cmp_ps_mask(t.heron, heron_min, _CMP_GT_OQ) &
+                 _mm512_cmpneq_epi32_mask(d.i1, d.i2) & _mm512_cmpneq_epi32_mask(d.i1, d.i3) &
+                 _mm512_cmpneq_epi32_mask(d.i2, d.i3);
+        return t;
+    };
+    Shaped shaped = shape(draw());
+    Drawn drawn = draw();
+    while (done.accepted < samples && done.attempts < max_attempts) {
+        const Shaped block = shaped;
+        shaped = shape(drawn);
+        drawn = draw();
+        const __m512i c1 = block.c1, c2 = block.c2, c3 = block.c3;
+        const __m512 a = block.a, b = block.b, c = block.c, heron = block.heron;
+        __mmask16 keep = block.keep;
         const std::size_t usable = std::min<std::size_t>(kLanes, max_attempts - done.attempts);
         if (usable < kLanes) keep &= static_cast<__mmask16>((1u << usable) - 1u);
         const std::size_t need = samples - done.accepted;
