@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 
 #include "esf_simd.hpp"
@@ -331,6 +332,36 @@ void set_cells(const std::uint32_t* cells, std::size_t count, VoxelGrid& grid) {
     for (std::size_t w = 0; w < grid.words.size(); ++w) grid.words[w] |= odd[w];
 }
 
+/// The finite points of the first `blocks` x 16 points, in order, to `out` (which has 16 floats of
+/// slack after what is kept); returns how many. Per block of 16 points (48 floats): the floats
+/// that are NaN or infinite, one bit each, folded to one bit per point (bits 3j), spread back
+/// to the point's three floats, and the kept floats compressed.
+ESF_TARGET_AVX512 std::size_t keep_finite_avx512(const float* p, std::size_t blocks, float* out) {
+    constexpr int kNonFinite = 0x01 | 0x08 | 0x10 | 0x80;   // quiet NaN, +inf, -inf, signalling NaN
+    constexpr std::uint64_t kFirstFloats = 0x249249249249;  // bit 3j of point j, j < 16
+    std::size_t kept = 0;                                   // floats
+    for (std::size_t b = 0; b < blocks; ++b) {
+        const __m512 v[3] = {_mm512_loadu_ps(p + 48 * b), _mm512_loadu_ps(p + 48 * b + 16),
+                             _mm512_loadu_ps(p + 48 * b + 32)};
+        std::uint64_t bad = 0;
+        for (int k = 0; k < 3; ++k)
+            bad |= std::uint64_t{_mm512_fpclass_ps_mask(v[k], kNonFinite)} << (16 * k);
+        if (bad == 0) {
+            for (int k = 0; k < 3; ++k) _mm512_storeu_ps(out + kept + 16 * k, v[k]);
+            kept += 48;
+            continue;
+        }
+        const std::uint64_t bad_points = _pext_u64(bad | bad >> 1 | bad >> 2, kFirstFloats);
+        const std::uint64_t keep = _pdep_u64(~bad_points & 0xFFFF, kFirstFloats) * 7;
+        for (int k = 0; k < 3; ++k) {
+            const auto floats = static_cast<__mmask16>(keep >> (16 * k));
+            _mm512_storeu_ps(out + kept, _mm512_maskz_compress_ps(floats, v[k]));
+            kept += static_cast<std::size_t>(std::popcount(static_cast<unsigned>(floats)));
+        }
+    }
+    return kept / 3;
+}
+
 }  // namespace
 
 NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int half, SimdLevel simd,
@@ -339,14 +370,29 @@ NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int h
     const float* p = points.data()->data();
     const std::size_t blocks = simd != SimdLevel::kPortable ? n / kLanes : 0;
     LaneSums sums;
-    if (blocks > 0) {
+    // In chunks, each adding to the same lane sums (so the sums do not depend on the chunking):
+    // a cloud with non-finite points (an organised scan's missing depths) is told apart after
+    // its first chunk that holds one, not after a pass over every point.
+    constexpr std::size_t kChunkBlocks = 256;
+    const auto non_finite = [&sums] {
+        for (const auto& lanes : sums.v)
+            for (const double x : lanes)
+                if (!std::isfinite(x)) return true;
+        return false;
+    };
+    for (std::size_t b = 0; b < blocks; b += kChunkBlocks) {
+        const std::size_t chunk = std::min(kChunkBlocks, blocks - b);
         if (simd == SimdLevel::kAvx512)
-            sum_avx512(p, blocks, sums);
+            sum_avx512(p + 3 * kLanes * b, chunk, sums);
         else
-            sum_avx2(p, blocks, sums);
+            sum_avx2(p + 3 * kLanes * b, chunk, sums);
+        if (non_finite()) return NormaliseOutcome::kNonFinite;
     }
-    for (std::size_t i = blocks * kLanes; i < n; ++i)
+    for (std::size_t i = blocks * kLanes; i < n; ++i) {
         for (int k = 0; k < 3; ++k) sums.v[k][i % kLanes] += points[i][k];
+        if (i % (kChunkBlocks * kLanes) == kChunkBlocks * kLanes - 1 && non_finite())
+            return NormaliseOutcome::kNonFinite;
+    }
     const double count = static_cast<double>(n);
     out.cx = sums.total(0) / count;
     out.cy = sums.total(1) / count;
@@ -406,6 +452,19 @@ Eigen::Matrix3d voxelise_points(std::span<const Eigen::Vector3f> points, const N
             covariance(k, j) = covariance(j, k) = moments.total(m++) - count * mean[k] * mean[j];
         }
     return covariance;
+}
+
+std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLevel simd,
+                               Points& finite) {
+    const std::size_t n = points.size();
+    finite.resize(n + 6);  // + 16 floats of slack for the full-width stores
+    const std::size_t blocks = simd == SimdLevel::kAvx512 ? n / kLanes : 0;
+    std::size_t kept =
+        blocks > 0 ? keep_finite_avx512(points.data()->data(), blocks, finite.data()->data()) : 0;
+    for (std::size_t i = blocks * kLanes; i < n; ++i)
+        if (points[i].allFinite()) finite[kept++] = points[i];
+    finite.resize(kept);
+    return n - kept;
 }
 
 }  // namespace esf::detail

@@ -41,6 +41,11 @@ enum class NormaliseOutcome {
 NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int half, SimdLevel simd,
                                   Normalisation& out);
 
+/// The finite points (no NaN or infinite coordinate), in order, into `finite` (replaced; its
+/// memory is reused); returns how many were dropped. The same points whatever `simd` says.
+std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLevel simd,
+                               std::vector<Eigen::Vector3f>& finite);
+
 /// Scales every point, stores it with its cell in `packed` (plus one zero padding point) and
 /// `cells`, and sets the cells in `grid` (not cleared first). Returns the covariance of the scaled
 /// points, times their count.

@@ -33,8 +33,9 @@ struct LzfDecoded {
 /// Decodes `in` into `out`. Bounds are checked on every token, so corrupt input reports an error
 /// instead of reading or writing out of range. Away from the ends of both buffers, tokens are
 /// copied in fixed-size blocks: bytes of `out` past `produced` may be overwritten, and bytes of
-/// `out` not yet written may be read (and masked off), so `out` should be initialised memory
-/// (the PCD reader passes zeroed pages from calloc, which cost nothing).
+/// `out` not yet written may be read (and masked off: they never reach the output). The PCD
+/// reader passes memory it has not cleared: zeroing 6 MB for every 640 x 480 scene would cost
+/// 5 % of reading it.
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out);
 
 }  // namespace esf::detail

@@ -192,11 +192,7 @@ void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::s
                  " compressed bytes cannot hold " + str(uncompressed) + " bytes");
     }
     const auto size = static_cast<std::size_t>(uncompressed);
-    // Zeroed memory (calloc: fresh pages from the system come zeroed at no cost), so that the
-    // decoder's masked reads past what it has written never meet indeterminate bytes.
-    const std::unique_ptr<unsigned char, decltype(&std::free)> buffer(
-        static_cast<unsigned char*>(std::calloc(std::max<std::size_t>(size, 1), 1)), &std::free);
-    if (!buffer) throw std::bad_alloc();
+    auto buffer = std::make_unique_for_overwrite<unsigned char[]>(std::max<std::size_t>(size, 1));
     const LzfDecoded decoded = lzf_decompress(
         {reinterpret_cast<const unsigned char*>(base + 8), static_cast<std::size_t>(compressed)},
         {buffer.get(), size});

@@ -1,6 +1,7 @@
 #include "esf/point_cloud.hpp"
 
 #include "esf/error.hpp"
+#include "esf_points.hpp"
 
 namespace esf {
 
@@ -11,11 +12,7 @@ FinitePoints drop_non_finite(std::span<const Eigen::Vector3f> points) {
 }
 
 std::size_t drop_non_finite(std::span<const Eigen::Vector3f> points, Points& finite) {
-    finite.clear();
-    finite.reserve(points.size());
-    for (const auto& p : points)
-        if (p.allFinite()) finite.push_back(p);
-    return points.size() - finite.size();
+    return detail::keep_finite_points(points, detail::simd_level(EsfKernels::kBest), finite);
 }
 
 std::string file_message(const std::string& path, std::size_t line, const std::string& reason) {

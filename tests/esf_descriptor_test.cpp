@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "esf_points.hpp"
 #include "esf_trace.hpp"
 #include "esf_triangles.hpp"
 
@@ -565,6 +566,39 @@ TEST(EsfTriangles, AngleBinsRoundToTheNearestOf64) {
     }
     EXPECT_EQ(esf::detail::angle_bin(-1e-6f), 0);  // a difference of angles a hair below zero
     EXPECT_EQ(esf::detail::angle_bin(2.0f), 63);
+}
+
+// The finite points of a cloud with NaN and infinite coordinates (in x, y or z alone, alone or in
+// runs, in blocks with none and blocks with all), by every code path, against the definition.
+TEST(FinitePoints, EveryPathKeepsTheFinitePointsInOrder) {
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> coordinate(-5.0f, 5.0f);
+    std::uniform_int_distribution<int> kind(0, 9);
+    const float bad[3] = {std::numeric_limits<float>::quiet_NaN(),
+                          std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity()};
+    for (const std::size_t n : {0u, 1u, 15u, 16u, 17u, 100u, 1000u, 4099u}) {
+        esf::Points points(n);
+        esf::Points expected;
+        for (std::size_t i = 0; i < n; ++i) {
+            points[i] = {coordinate(rng), coordinate(rng), coordinate(rng)};
+            const bool in_bad_run = (i / 40) % 3 == 1;  // whole blocks of missing points
+            if (in_bad_run || kind(rng) < 3)
+                points[i][static_cast<int>(i % 3)] = bad[i % 3];
+            else
+                expected.push_back(points[i]);
+        }
+        for (const auto simd : {esf::detail::SimdLevel::kAvx512, esf::detail::SimdLevel::kAvx2,
+                                esf::detail::SimdLevel::kPortable}) {
+            if (simd == esf::detail::SimdLevel::kAvx512 && !esf::detail::esf_avx512_available())
+                continue;
+            esf::Points finite(3, Eigen::Vector3f::Ones());  // replaced, not appended to
+            const std::size_t dropped = esf::detail::keep_finite_points(points, simd, finite);
+            EXPECT_EQ(dropped, n - expected.size()) << n;
+            EXPECT_EQ(finite, expected) << n;
+        }
+        EXPECT_EQ(esf::drop_non_finite(points).points, expected) << n;
+    }
 }
 
 TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
