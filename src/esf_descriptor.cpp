@@ -242,7 +242,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
             : std::all_of(input.begin(), input.end(),
                           [](const Eigen::Vector3f& p) { return p.allFinite(); });
     if (!all_finite) {
-        result.dropped_points = drop_non_finite(input, ws.finite);
+        result.dropped_points = detail::keep_finite_points(input, simd, ws.finite);
         points = ws.finite;
         if (!pcl && points.size() >= 3)
             normalised = detail::normalise_points(points, half, simd, normalisation);
