@@ -245,10 +245,11 @@ ESF_TARGET_AVX512 void visited_records_avx512(std::span<const std::uint32_t> sta
 // - Closed form. After i cells the reference has stepped a minor axis of length a
 //   q(i) = floor((2 a i + L - 1) / (2 L)) times (its error term starts at 2a - L, gains 2a per
 //   cell and loses 2L per step). That is floor(v(i)), v(i) = i * a/L + (L - 1/2) / (2L), exactly:
-//   v(i) is never within 1/(4L) >= 1/252 of an integer, and the float evaluation (products of
-//   integers below 2^13 by one rounded reciprocal, one fused multiply-add) errs by less than 1e-5.
-//   The steps to cells i+1 and i+2 follow from r = v(i) - q(i) (exact in float):
-//   q(i+1) - q(i) = [r >= 1 - a/L] and q(i+2) - q(i) = floor(r + 2a/L), both with that margin.
+//   v(i) is never within 1/(4L) >= 1/252 of an integer. The float evaluation (v at the first
+//   cell by one fused multiply-add of rounded slopes, then sums of 3 a/L per 3 cells) errs by
+//   less than 1e-4 after 64 cells. The steps to cells i+1 and i+2 follow from r = v(i) - q(i)
+//   (exact in float): n = q(i+1) - q(i) = [r >= 1 - a/L] and q(i+2) - q(i+1) =
+//   [r >= 1 - 2a/L + n], both with that margin.
 // - Cube table. Entry j of `cubes` (from kCubePad) holds the 3x3x3 cells j + dx + 64 dy + 4096 dz
 //   as bit dx + 3 dy + 9 dz. Cells i, i+1 and i+2 of a line lie within two steps of cell i along
 //   each axis, in its direction, so all three lie in the cube anchored at cell i minus two steps

@@ -6,11 +6,11 @@
 struct CubeLanes {
     __m512 start, major_step, step1, step2;  // anchor cell arithmetic, in float (exact: < 2^24)
     __m512 slope1, slope2, intercept;        // v(i) = i * slope + intercept
-    __m512 rise1, rise2;                     // 1 - slope
-    __m512 twice1, twice2;                   // 2 slope
-    __m512 base2, weight1f, weight2f;        // bit of cell i+2: base2 + steps1 w1 + steps2 w2
-    __m512 limit;                            // cells before it are counted
-    __m512i first_bit, base1, weight1, weight2, occupied;
+    __m512 slope1x3, slope2x3, major_step_x3;
+    __m512 rise1, rise2;    // 1 - slope
+    __m512 after1, after2;  // 1 - 2 slope
+    __m512 limit;           // cells before it are counted
+    __m512i first_bit, base1, major_weight, weight1, weight2, occupied;
 };
 
 /// The value of the major axis, and of the first and second minor axis (x-major: y, z;
@@ -77,16 +77,17 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
     lanes.intercept = _mm512_mul_ps(_mm512_sub_ps(l, _mm512_set1_ps(0.5f)), half_per_cell);
     lanes.rise1 = _mm512_sub_ps(_mm512_set1_ps(1.0f), lanes.slope1);
     lanes.rise2 = _mm512_sub_ps(_mm512_set1_ps(1.0f), lanes.slope2);
-    lanes.twice1 = _mm512_add_ps(lanes.slope1, lanes.slope1);
-    lanes.twice2 = _mm512_add_ps(lanes.slope2, lanes.slope2);
-    const __m512i major_weight = major_of(roles, weight);
+    const __m512 three = _mm512_set1_ps(3.0f);
+    lanes.slope1x3 = _mm512_mul_ps(lanes.slope1, three);
+    lanes.slope2x3 = _mm512_mul_ps(lanes.slope2, three);
+    lanes.major_step_x3 = _mm512_mul_ps(lanes.major_step, three);
+    lanes.after1 = _mm512_sub_ps(lanes.rise1, lanes.slope1);
+    lanes.after2 = _mm512_sub_ps(lanes.rise2, lanes.slope2);
+    lanes.major_weight = major_of(roles, weight);
     lanes.first_bit = _mm512_sllv_epi32(one, base0);
-    lanes.base1 = _mm512_add_epi32(base0, major_weight);
-    lanes.base2 = _mm512_cvtepi32_ps(_mm512_add_epi32(lanes.base1, major_weight));
+    lanes.base1 = _mm512_add_epi32(base0, lanes.major_weight);
     lanes.weight1 = minor1_of(roles, weight);
     lanes.weight2 = minor2_of(roles, weight);
-    lanes.weight1f = _mm512_cvtepi32_ps(lanes.weight1);
-    lanes.weight2f = _mm512_cvtepi32_ps(lanes.weight2);
     // With known ends, cells 0, 1 and L-1 count without a look-up and the walk covers 2..L-2.
     lanes.limit = _mm512_cvtepi32_ps(skip_known ? _mm512_sub_epi32(cells, one) : cells);
     lanes.occupied = skip_known ? _mm512_min_epi32(cells, _mm512_set1_epi32(3)) : zero;
@@ -98,23 +99,46 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
 /// past their end masked).
 enum CellsCounted { kPerLane = 0, kFirstCell = 1, kFirstTwoCells = 2, kAllCells = 3 };
 
-/// Cells i, i+1 and i+2 of every lane (`i` in every lane of fi), as many as `counted` says.
+/// Where a walk is at cell i: v(i) of both minor axes and the anchor cell arithmetic of the
+/// major axis (start + i * major_step). Each step of 3 cells adds 3 slope and 3 major_step: the
+/// sums' rounding (under 1e-4 after 64 cells) stays far inside the margin of 1/(4L) of v(i).
+struct CubeWalk {
+    __m512 v1, v2, major;
+};
+
+ESF_CUBE_TARGET inline CubeWalk start_walk(const CubeLanes& lanes, int first_cell) {
+    const __m512 fi = _mm512_set1_ps(static_cast<float>(first_cell));
+    return {_mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept),
+            _mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept),
+            _mm512_fmadd_ps(fi, lanes.major_step, lanes.start)};
+}
+
+ESF_CUBE_TARGET inline void advance_walk(const CubeLanes& lanes, CubeWalk& walk) {
+    walk.v1 = _mm512_add_ps(walk.v1, lanes.slope1x3);
+    walk.v2 = _mm512_add_ps(walk.v2, lanes.slope2x3);
+    walk.major = _mm512_add_ps(walk.major, lanes.major_step_x3);
+}
+
+/// Cells i, i+1 and i+2 of every lane (the walk at cell i), as many as `counted` says.
 template <CellsCounted counted>
-ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, __m512 fi) {
+ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, const CubeWalk& walk,
+                                         int i) {
     constexpr bool tail = counted == kPerLane;
     constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
-    const __m512 v1 = _mm512_fmadd_ps(fi, lanes.slope1, lanes.intercept);
-    const __m512 v2 = _mm512_fmadd_ps(fi, lanes.slope2, lanes.intercept);
+    const __m512 v1 = walk.v1, v2 = walk.v2;
     const __m512 q1 = _mm512_roundscale_ps(v1, kFloor);
     const __m512 q2 = _mm512_roundscale_ps(v2, kFloor);
     const __m512 r1 = _mm512_sub_ps(v1, q1), r2 = _mm512_sub_ps(v2, q2);
     const __mmask16 next1 = _mm512_cmp_ps_mask(r1, lanes.rise1, _CMP_GE_OQ);
     const __mmask16 next2 = _mm512_cmp_ps_mask(r2, lanes.rise2, _CMP_GE_OQ);
-    const __m512 steps1 = _mm512_roundscale_ps(_mm512_add_ps(r1, lanes.twice1), kFloor);
-    const __m512 steps2 = _mm512_roundscale_ps(_mm512_add_ps(r2, lanes.twice2), kFloor);
-    const __m512 position = _mm512_fmadd_ps(
-        q2, lanes.step2,
-        _mm512_fmadd_ps(q1, lanes.step1, _mm512_fmadd_ps(fi, lanes.major_step, lanes.start)));
+    // The step from cell i+1 to i+2: r + 2 slope >= 1 + next (one compare, no floor).
+    const __m512 one_f = _mm512_set1_ps(1.0f);
+    const __mmask16 later1 = _mm512_cmp_ps_mask(
+        r1, _mm512_mask_add_ps(lanes.after1, next1, lanes.after1, one_f), _CMP_GE_OQ);
+    const __mmask16 later2 = _mm512_cmp_ps_mask(
+        r2, _mm512_mask_add_ps(lanes.after2, next2, lanes.after2, one_f), _CMP_GE_OQ);
+    const __m512 position =
+        _mm512_fmadd_ps(q2, lanes.step2, _mm512_fmadd_ps(q1, lanes.step1, walk.major));
     __m512i anchor = _mm512_cvttps_epi32(position);
     // Lanes past their end may leave the grid: their (ignored) look-ups stay in the table.
     if (tail)
@@ -124,16 +148,17 @@ ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, __m
         _mm512_setzero_si512(), static_cast<__mmask16>(0xffff), anchor, cubes, 4);
     __m512i bit1 = _mm512_mask_add_epi32(lanes.base1, next1, lanes.base1, lanes.weight1);
     bit1 = _mm512_mask_add_epi32(bit1, next2, bit1, lanes.weight2);
-    const __m512i bit2 = _mm512_cvttps_epi32(_mm512_fmadd_ps(
-        steps1, lanes.weight1f, _mm512_fmadd_ps(steps2, lanes.weight2f, lanes.base2)));
+    __m512i bit2 = _mm512_add_epi32(bit1, lanes.major_weight);
+    bit2 = _mm512_mask_add_epi32(bit2, later1, bit2, lanes.weight1);
+    bit2 = _mm512_mask_add_epi32(bit2, later2, bit2, lanes.weight2);
     const __m512i one = _mm512_set1_epi32(1);
     __mmask16 live[3] = {0xffff, 0xffff, 0xffff};  // cells i, i+1, i+2 before the lane's end
     if (counted == kFirstCell || counted == kFirstTwoCells) live[2] = 0;
     if (counted == kFirstCell) live[1] = 0;
     if (tail)
         for (int k = 0; k < 3; ++k)
-            live[k] = _mm512_cmp_ps_mask(
-                lanes.limit, _mm512_add_ps(fi, _mm512_set1_ps(static_cast<float>(k))), _CMP_GT_OQ);
+            live[k] = _mm512_cmp_ps_mask(lanes.limit, _mm512_set1_ps(static_cast<float>(i + k)),
+                                         _CMP_GT_OQ);
 #if ESF_CUBE_POPCNT
     // One population count of the three selected bits.
     const __m512i first = _mm512_maskz_mov_epi32(live[0], lanes.first_bit);
@@ -174,7 +199,6 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::ui
                                   std::uint32_t* occupied, bool skip_known) {
     const auto* cubes = reinterpret_cast<const int*>(cube_table);
     const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
-    const __m512 three = _mm512_set1_ps(3.0f);
     for (std::size_t group = 0; group < count; group += 16) {
         const std::size_t size = std::min<std::size_t>(16, count - group);
         const std::uint64_t* record = records + group;
@@ -184,15 +208,15 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::ui
         const int shortest = visited[record[0] >> kLineShift] - end_skip;
         const int longest = visited[record[size - 1] >> kLineShift] - end_skip;
         int i = first_cell;
-        __m512 fi = _mm512_set1_ps(static_cast<float>(i));
-        for (; i + 2 < shortest; i += 3, fi = _mm512_add_ps(fi, three))
-            trace_triple<kAllCells>(lanes, cubes, fi);
+        CubeWalk walk = start_walk(lanes, i);
+        for (; i + 2 < shortest; i += 3, advance_walk(lanes, walk))
+            trace_triple<kAllCells>(lanes, cubes, walk, i);
         if (shortest == longest) {  // most groups: every lane ends at the same cell
-            if (longest - i == 1) trace_triple<kFirstCell>(lanes, cubes, fi);
-            if (longest - i == 2) trace_triple<kFirstTwoCells>(lanes, cubes, fi);
+            if (longest - i == 1) trace_triple<kFirstCell>(lanes, cubes, walk, i);
+            if (longest - i == 2) trace_triple<kFirstTwoCells>(lanes, cubes, walk, i);
         } else {
-            for (; i < longest; i += 3, fi = _mm512_add_ps(fi, three))
-                trace_triple<kPerLane>(lanes, cubes, fi);
+            for (; i < longest; i += 3, advance_walk(lanes, walk))
+                trace_triple<kPerLane>(lanes, cubes, walk, i);
         }
         _mm512_mask_i32scatter_epi32(occupied, static_cast<__mmask16>((1u << size) - 1u), lines,
                                      lanes.occupied, 4);

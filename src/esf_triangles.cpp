@@ -235,12 +235,22 @@ ESF_TARGET_AVX512 void angle_bins_avx512(TriangleSet& set, std::size_t t) {
 /// The x, y, z and cell of points[index[l]] for the 16 lanes, by four gathers.
 ESF_TARGET_AVX512 inline void gather16(const PackedPoint* points, __m512i index, __m512& x,
                                        __m512& y, __m512& z, __m512i& cell) {
+    // Two 8-byte halves (x, y and z, cell) of each point, 8 points per gather: half the gathered
+    // elements of 16 single-float gathers. The halves are then split into lanes.
     const __m512i at = _mm512_slli_epi32(index, 1);  // in units of 8 bytes (a point is 16)
-    const auto* base = reinterpret_cast<const char*>(points);
-    x = _mm512_i32gather_ps(at, base, 8);
-    y = _mm512_i32gather_ps(at, base + 4, 8);
-    z = _mm512_i32gather_ps(at, base + 8, 8);
-    cell = _mm512_i32gather_epi32(at, base + 12, 8);
+    const __m256i low = _mm512_castsi512_si256(at), high = _mm512_extracti64x4_epi64(at, 1);
+    const auto* base = reinterpret_cast<const long long*>(points);
+    const __m512i xy0 = _mm512_i32gather_epi64(low, base, 8);
+    const __m512i xy1 = _mm512_i32gather_epi64(high, base, 8);
+    const __m512i zc0 = _mm512_i32gather_epi64(low, base + 1, 8);
+    const __m512i zc1 = _mm512_i32gather_epi64(high, base + 1, 8);
+    const __m512i even =
+        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    const __m512i odd = _mm512_add_epi32(even, _mm512_set1_epi32(1));
+    x = _mm512_castsi512_ps(_mm512_permutex2var_epi32(xy0, even, xy1));
+    y = _mm512_castsi512_ps(_mm512_permutex2var_epi32(xy0, odd, xy1));
+    z = _mm512_castsi512_ps(_mm512_permutex2var_epi32(zc0, even, zc1));
+    cell = _mm512_permutex2var_epi32(zc0, odd, zc1);
 }
 
 /// Stores the lanes of `keep`, in order, to dst[0 .. popcount(keep)).
