@@ -601,6 +601,31 @@ ESF_TARGET_AVX2 void angle_bins_avx2(TriangleSet& set, std::size_t t) {
                                         _mm256_slli_epi32(angle_bin8(angle2), 16)));
 }
 
+/// 1/v for v = 1 .. 64, rounded to nearest.
+constexpr std::array<float, 64> reciprocal_table() {
+    std::array<float, 64> table{};
+    for (int v = 1; v <= 64; ++v)
+        table[static_cast<std::size_t>(v - 1)] = 1.0f / static_cast<float>(v);
+    return table;
+}
+alignas(64) constexpr std::array<float, 64> kReciprocal = reciprocal_table();
+
+/// o / v for whole numbers 0 <= o <= 64 and 1 <= v <= 64, equal to the rounded division without
+/// the divider (slow for 16 lanes): the product by the rounded reciprocal y, corrected by its
+/// remainder, q + (o - q v) y. A test compares it with division for every such pair.
+ESF_TARGET_AVX512 inline __m512 small_ratio16(__m512i o, __m512i v) {
+    const __m512i slot = _mm512_sub_epi32(v, _mm512_set1_epi32(1));
+    const __m512 y =
+        _mm512_mask_blend_ps(_mm512_cmpge_epi32_mask(slot, _mm512_set1_epi32(32)),
+                             _mm512_permutex2var_ps(_mm512_load_ps(kReciprocal.data()), slot,
+                                                    _mm512_load_ps(kReciprocal.data() + 16)),
+                             _mm512_permutex2var_ps(_mm512_load_ps(kReciprocal.data() + 32), slot,
+                                                    _mm512_load_ps(kReciprocal.data() + 48)));
+    const __m512 a = _mm512_cvtepi32_ps(o), b = _mm512_cvtepi32_ps(v);
+    const __m512 q = _mm512_mul_ps(a, y);
+    return _mm512_fmadd_ps(_mm512_fnmadd_ps(q, b, a), y, q);
+}
+
 /// Histogram positions of 16 triangles, relative to the copy of each lane: bins[slot][lane],
 /// slots 0-2 the lines (D2 IN or OUT, or the joint bin of a MIXED line), 3 D3, 4-6 A3 with
 /// weights weight[0..2].
@@ -682,9 +707,8 @@ ESF_TARGET_AVX512 void histogram_block_avx512(const TriangleSet& set, const std:
         const __m512i in_or_out =
             _mm512_mask_add_epi32(_mm512_add_epi32(bin, _mm512_set1_epi32(6 * kEsfBins)), out, bin,
                                   _mm512_set1_epi32(7 * kEsfBins));
-        const __m512 ratio = _mm512_div_ps(_mm512_cvtepi32_ps(o[k]), _mm512_cvtepi32_ps(v[k]));
-        const __m512i ratio_bin =
-            _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(ratio, top_f), half));
+        const __m512i ratio_bin = _mm512_cvttps_epi32(
+            _mm512_add_ps(_mm512_mul_ps(small_ratio16(o[k], v[k]), top_f), half));
         const __m512i joint =
             _mm512_add_epi32(_mm512_add_epi32(joint_base, _mm512_slli_epi32(bin, 6)), ratio_bin);
         _mm512_store_si512(block.bins[k], _mm512_mask_mov_epi32(in_or_out, mixed, joint));
@@ -875,6 +899,18 @@ SampleCount sample_triangles_fast(const PackedPoint* points, std::uint32_t count
         set.angle_bins[t] =
             triangle_angle_bins(set.d2[t], set.d2[set.samples + t], set.d2[2 * set.samples + t]);
     return done;
+}
+
+ESF_TARGET_AVX512 void small_ratios_avx512(const std::uint32_t* o, const std::uint32_t* v,
+                                           float* out, std::size_t count) {
+    for (std::size_t i = 0; i < count; i += kLanes) {
+        const auto live = static_cast<__mmask16>(
+            count - i >= kLanes ? 0xffffu : (1u << static_cast<unsigned>(count - i)) - 1u);
+        const __m512i occupied = _mm512_maskz_loadu_epi32(live, o + i);
+        const __m512i visited =
+            _mm512_mask_loadu_epi32(_mm512_set1_epi32(1), live, v + i);  // 1: no lookup past 64
+        _mm512_mask_storeu_ps(out + i, live, small_ratio16(occupied, visited));
+    }
 }
 
 EsfCounts histogram_triangles(const TriangleSet& set, const std::uint32_t* occupied,

@@ -72,6 +72,12 @@ std::uint32_t triangle_angle_bins(float a, float b, float c);
 /// A3 bin of a folded angle: round(angle / (pi/2) * 63), at most 63.
 int angle_bin(float angle);
 
+/// o[i] / v[i] for whole numbers 0 <= o[i] <= 64 and 1 <= v[i] <= 64 (a line's occupied and
+/// visited cells), as the AVX-512 histogram kernel forms them without a division; it must equal
+/// the rounded division. Needs AVX-512 (esf_avx512_available()).
+void small_ratios_avx512(const std::uint32_t* o, const std::uint32_t* v, float* out,
+                         std::size_t count);
+
 /// The ten histograms as integer counts (A3 counts are weighted by the visited cells of the
 /// line opposite to the angle), from the triangles and the occupied / visited cells of their
 /// lines. `pcl_division`: bin D2 and D3 values as the reference does (d / max * 63) rather than

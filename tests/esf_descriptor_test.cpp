@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -566,6 +567,26 @@ TEST(EsfTriangles, AngleBinsRoundToTheNearestOf64) {
     }
     EXPECT_EQ(esf::detail::angle_bin(-1e-6f), 0);  // a difference of angles a hair below zero
     EXPECT_EQ(esf::detail::angle_bin(2.0f), 63);
+}
+
+// The AVX-512 histogram forms a line's occupied / visited ratio without a division: it must be
+// the rounded quotient for every count a line can have.
+TEST(EsfTriangles, RatiosWithoutDivisionEqualTheQuotient) {
+    if (!esf::detail::esf_avx512_available()) GTEST_SKIP() << "no AVX-512 on this CPU";
+    std::vector<std::uint32_t> occupied, visited;
+    for (std::uint32_t v = 1; v <= 64; ++v)
+        for (std::uint32_t o = 0; o <= 64; ++o) {
+            occupied.push_back(o);
+            visited.push_back(v);
+        }
+    std::vector<float> ratio(occupied.size(), -1.0f);
+    esf::detail::small_ratios_avx512(occupied.data(), visited.data(), ratio.data(),
+                                     occupied.size());
+    for (std::size_t i = 0; i < occupied.size(); ++i) {
+        const float quotient = static_cast<float>(occupied[i]) / static_cast<float>(visited[i]);
+        ASSERT_EQ(std::bit_cast<std::uint32_t>(ratio[i]), std::bit_cast<std::uint32_t>(quotient))
+            << occupied[i] << " / " << visited[i];
+    }
 }
 
 // The finite points of a cloud with NaN and infinite coordinates (in x, y or z alone, alone or in
