@@ -11,6 +11,7 @@
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cstdlib>
 #include <limits>
@@ -276,62 +277,124 @@ void sort_lines(std::span<const std::uint64_t> records, std::span<const std::uin
     for (std::size_t i = 0; i < visited.size(); ++i) sorted[bucket[visited[i]]++] = records[i];
 }
 
-/// Entries 16 J .. 16 J + 15 of a row of the cube table from its four byte planes. J is a
-/// template argument because the lane of _mm512_extracti32x4_epi32 must be an immediate, which a
-/// loop counter is not in every build (sanitizer builds do not unroll the loop).
-template <int J>
-ESF_TARGET_AVX512 inline __m512i cube_entry(const __m512i (&plane)[4]) {
-    __m512i entry = _mm512_setzero_si512();
-    for (int p = 0; p < 4; ++p)
-        entry = _mm512_or_si512(
-            entry, _mm512_slli_epi32(_mm512_cvtepu8_epi32(_mm512_extracti32x4_epi32(plane[p], J)),
-                                     static_cast<unsigned>(8 * p)));
-    return entry;
+/// Cells x + dx (dx = 0, 1, 2) of word `at` of `words` for x = 0 .. 63, as bits dx of 64
+/// bytes. Past x = 63 the cells continue into the next word (the cube table is linear).
+ESF_TARGET_AVX512 inline __m512i cell_triples(const std::uint64_t* at) {
+    const std::uint64_t low = at[0], high = at[1];
+    const __m512i one = _mm512_set1_epi8(1), two = _mm512_set1_epi8(2);
+    const __m512i four = _mm512_set1_epi8(4);
+    return _mm512_ternarylogic_epi32(_mm512_maskz_mov_epi8(low, one),
+                                     _mm512_maskz_mov_epi8((low >> 1) | (high << 63), two),
+                                     _mm512_maskz_mov_epi8((low >> 2) | (high << 62), four), 0xfe);
 }
 
-/// Fills the cube table for `grid`. Rows of 64 entries whose cells are all empty are zero;
-/// `dirty` marks the rows that are not, so a later grid clears only those.
+/// Calls f(i) for each set bit i of `bits` with from <= i < to.
+template <typename F>
+inline void for_each_bit(const std::uint64_t* bits, int from, int to, F&& f) {
+    for (int chunk = from >> 6; from < to; ++chunk) {
+        std::uint64_t m = bits[chunk] & (~std::uint64_t{0} << (from & 63));
+        const int end = std::min(to, (chunk + 1) * 64);
+        if (end < (chunk + 1) * 64) m &= (std::uint64_t{1} << (end & 63)) - 1;
+        for (; m != 0; m &= m - 1) f(chunk * 64 + std::countr_zero(m));
+        from = end;
+    }
+}
+
+/// Fills the cube table for `grid`, in three layers of linear rows r (cells 64 r .. 64 r + 63):
+/// T(r), the cells x, x+1, x+2 of row r as 3 bits (16-bit lanes); S(r) = T(r) | T(r+1) << 3 |
+/// T(r+2) << 6, the 3x3 square in y; entry 64 r + x = S(r) | S(r+64) << 9 | S(r+128) << 18, the
+/// cube. Each layer is formed once per row and reused by the three rows above it. Bitmaps of the
+/// rows with a cell in each layer let the work skip empty rows: their cubes are zero, and
+/// `dirty_rows` marks the table rows that are not, so a later grid clears only those.
 ESF_TARGET_AVX512 void build_cubes(const VoxelGrid& grid, TraceScratch& scratch) {
-    std::array<std::uint64_t, kCubeWordPad + kGridWords + kCubeWordPad> words{};
+    // Zero words before and after the grid: table rows start kCubeWordPad words before it, and
+    // each reads 131 words ahead.
+    constexpr int kWords = kCubeWordPad + kGridWords + kCubeWordPad;
+    constexpr int kRows = kCubeWordPad + kGridWords;  // table rows, from word 0 of `words`
+    constexpr int kChunks = kWords / 64 + 4;          // bitmap words, zero past the end
+    constexpr int kRowChunks = (kRows + 63) / 64;
+    constexpr int kRing = 256;  // S rows kept: 129 are read
+    static_assert(kWords % 8 == 0 && kCubeWordPad >= 2 * kGridSide + 4 &&
+                  kRing > 2 * kGridSide + 2);
+    alignas(64) std::array<std::uint64_t, kWords> words{};
     std::copy(grid.words.begin(), grid.words.end(), words.begin() + kCubeWordPad);
     if (scratch.cubes.empty()) {
         scratch.cubes.assign(static_cast<std::size_t>(kCubePad + kGridCells), 0u);
-        scratch.dirty_rows.assign(static_cast<std::size_t>(kCubeWordPad + kGridWords), 0);
+        scratch.dirty_rows.assign(kRowChunks, 0);
     }
-    __m512i bit[8];
-    for (int k = 0; k < 8; ++k) bit[k] = _mm512_set1_epi8(static_cast<char>(1 << k));
-    for (int row = -kCubeWordPad; row < kGridWords; ++row) {  // entries 64 row .. 64 row + 63
-        const std::uint64_t* w = words.data() + kCubeWordPad + row;
-        std::uint8_t& dirty = scratch.dirty_rows[static_cast<std::size_t>(row + kCubeWordPad)];
-        auto* entries =
-            reinterpret_cast<__m512i*>(scratch.cubes.data() + kCubePad + 64 * std::ptrdiff_t{row});
-        // Most rows of a view's grid are empty: so are their cubes.
-        if ((w[0] | w[1] | w[2] | w[3] | w[64] | w[65] | w[66] | w[67] | w[128] | w[129] | w[130] |
-             w[131]) == 0) {
-            if (dirty)
-                for (int j = 0; j < 4; ++j)
-                    _mm512_storeu_si512(entries + j, _mm512_setzero_si512());
-            dirty = 0;
-            continue;
+    // Rows with a cell: in the grid (any), in T (t_any), in S (s_any), in the table (table_any).
+    std::array<std::uint64_t, kChunks> any{}, t_any{}, s_any{};
+    for (int w = 0; w < kWords; w += 8) {
+        const __m512i v = _mm512_load_si512(&words[static_cast<std::size_t>(w)]);
+        any[static_cast<std::size_t>(w >> 6)] |= std::uint64_t{_mm512_test_epi64_mask(v, v)}
+                                                 << (w & 63);
+    }
+    // Row r + k of a bitmap, for rows r of chunk c (k < 64).
+    const auto ahead = [](const std::array<std::uint64_t, kChunks>& bits, std::size_t c, int k) {
+        return k == 0 ? bits[c] : (bits[c] >> k) | (bits[c + 1] << (64 - k));
+    };
+    for (std::size_t c = 0; c + 1 < kChunks; ++c) t_any[c] = any[c] | ahead(any, c, 1);
+    for (std::size_t c = 0; c + 1 < kChunks; ++c)
+        s_any[c] = t_any[c] | ahead(t_any, c, 1) | ahead(t_any, c, 2);
+    const auto has = [](const std::array<std::uint64_t, kChunks>& bits, int row) {
+        return (bits[static_cast<std::size_t>(row >> 6)] >> (row & 63) & 1) != 0;
+    };
+
+    alignas(64) std::uint16_t t_rows[4][64];
+    alignas(64) std::uint16_t s_rows[kRing][64];
+    int t_next = 0, s_next = 0;  // the rows of T and S not formed yet start here
+    const auto form_t = [&](int upto) ESF_TARGET_AVX512 {  // T of the rows < upto
+        for_each_bit(t_any.data(), t_next, upto, [&](int row) ESF_TARGET_AVX512 {
+            const __m512i bytes = cell_triples(&words[static_cast<std::size_t>(row)]);
+            std::uint16_t* out = t_rows[row & 3];
+            _mm512_store_si512(out, _mm512_cvtepu8_epi16(_mm512_castsi512_si256(bytes)));
+            _mm512_store_si512(out + 32, _mm512_cvtepu8_epi16(_mm512_extracti64x4_epi64(bytes, 1)));
+        });
+        t_next = std::max(t_next, upto);
+    };
+    const auto t_half = [&](int row, int h) ESF_TARGET_AVX512 {
+        return has(t_any, row) ? _mm512_load_si512(t_rows[row & 3] + h) : _mm512_setzero_si512();
+    };
+    const auto form_s = [&](int upto) ESF_TARGET_AVX512 {  // S of the rows < upto
+        for_each_bit(s_any.data(), s_next, upto, [&](int row) ESF_TARGET_AVX512 {
+            form_t(row + 3);
+            for (int h = 0; h < 64; h += 32)
+                _mm512_store_si512(s_rows[row & (kRing - 1)] + h,
+                                   _mm512_ternarylogic_epi32(
+                                       t_half(row, h), _mm512_slli_epi16(t_half(row + 1, h), 3),
+                                       _mm512_slli_epi16(t_half(row + 2, h), 6), 0xfe));
+        });
+        s_next = std::max(s_next, upto);
+    };
+    const auto s_part = [&](int row, int j) ESF_TARGET_AVX512 {  // entries 16 j .. 16 j + 15
+        return has(s_any, row)
+                   ? _mm512_cvtepu16_epi32(_mm256_load_si256(
+                         reinterpret_cast<const __m256i*>(s_rows[row & (kRing - 1)] + 16 * j)))
+                   : _mm512_setzero_si512();
+    };
+    const auto table_row = [&](int row) ESF_TARGET_AVX512 {
+        return reinterpret_cast<__m512i*>(scratch.cubes.data() + 64 * std::ptrdiff_t{row});
+    };
+    for (int c = 0; c < kRowChunks; ++c) {
+        const auto uc = static_cast<std::size_t>(c);
+        std::uint64_t live = s_any[uc] | s_any[uc + 1] | s_any[uc + 2];
+        if (64 * (c + 1) > kRows) live &= (std::uint64_t{1} << (kRows & 63)) - 1;
+        for (std::uint64_t m = scratch.dirty_rows[uc] & ~live; m != 0; m &= m - 1) {
+            __m512i* entries = table_row(64 * c + std::countr_zero(m));
+            for (int j = 0; j < 4; ++j) _mm512_storeu_si512(entries + j, _mm512_setzero_si512());
         }
-        dirty = 1;
-        // Byte x of plane p: bits 8p .. 8p + 7 of entry 64 row + x.
-        __m512i plane[4] = {_mm512_setzero_si512(), _mm512_setzero_si512(), _mm512_setzero_si512(),
-                            _mm512_setzero_si512()};
-        for (int dz = 0; dz < 3; ++dz)
-            for (int dy = 0; dy < 3; ++dy) {
-                const std::uint64_t low = w[dy + 64 * dz], high = w[dy + 64 * dz + 1];
-                for (int dx = 0; dx < 3; ++dx) {
-                    const std::uint64_t cells = dx == 0 ? low : (low >> dx) | (high << (64 - dx));
-                    const int k = dx + 3 * dy + 9 * dz;
-                    plane[k / 8] =
-                        _mm512_or_si512(plane[k / 8], _mm512_maskz_mov_epi8(cells, bit[k % 8]));
-                }
-            }
-        _mm512_storeu_si512(entries + 0, cube_entry<0>(plane));
-        _mm512_storeu_si512(entries + 1, cube_entry<1>(plane));
-        _mm512_storeu_si512(entries + 2, cube_entry<2>(plane));
-        _mm512_storeu_si512(entries + 3, cube_entry<3>(plane));
+        scratch.dirty_rows[uc] = live;
+        for (; live != 0; live &= live - 1) {
+            const int row = 64 * c + std::countr_zero(live);
+            form_s(row + 2 * kGridSide + 1);
+            __m512i* entries = table_row(row);
+            for (int j = 0; j < 4; ++j)
+                _mm512_storeu_si512(
+                    entries + j,
+                    _mm512_ternarylogic_epi32(
+                        s_part(row, j), _mm512_slli_epi32(s_part(row + kGridSide, j), 9),
+                        _mm512_slli_epi32(s_part(row + 2 * kGridSide, j), 18), 0xfe));
+        }
     }
 }
 
