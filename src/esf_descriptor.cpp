@@ -165,13 +165,6 @@ inline bool triangle_pcl(const Eigen::Vector3f& p1, const Eigen::Vector3f& p2,
 /// True when the points lie on one line up to float rounding: the second principal axis is
 /// shorter than 1e-5 of the first. Heron's formula in float does not reject such triples (its
 /// cancellation error exceeds the area threshold), so they are caught here.
-bool collinear(const Eigen::Matrix3d& covariance) {
-    const Eigen::Vector3d eigenvalues =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
-            .eigenvalues();  // ascending
-    return eigenvalues[1] <= 1e-10 * eigenvalues[2];
-}
-
 bool collinear(std::span<const Eigen::Vector3f> points) {
     // Scalar accumulators (an Eigen matrix accumulator goes through memory on every point).
     double mx = 0.0, my = 0.0, mz = 0.0;
@@ -196,7 +189,7 @@ bool collinear(std::span<const Eigen::Vector3f> points) {
     }
     Eigen::Matrix3d covariance;
     covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
-    return collinear(covariance);
+    return detail::on_one_line(covariance);
 }
 
 [[noreturn]] void throw_degenerate(std::size_t points, std::size_t accepted, std::size_t attempts) {
@@ -287,9 +280,9 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     } else {
         // One pass: scaled point, its cell, the grid and the moments for the collinearity test
         // (the scaled points are centred, so raw moments lose nothing).
-        const Eigen::Matrix3d covariance = detail::voxelise_points(
-            points, normalisation, half, simd, ws.packed, ws.cells, ws.grid);
-        if (collinear(covariance)) throw on_one_line();
+        if (detail::voxelise_points(points, normalisation, half, simd, ws.packed, ws.cells,
+                                    ws.grid))
+            throw on_one_line();
     }
     ws.grid.dilate(opt.grid_size, simd == detail::SimdLevel::kAvx512);
 

@@ -2,6 +2,7 @@
 
 #include <immintrin.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -37,6 +38,37 @@ using LaneSums = LaneSumsOf<3>;
 /// Moments of the scaled points: x, y, z, xx, xy, xz, yy, yz, zz.
 using LaneMoments = LaneSumsOf<9>;
 
+/// The same moments summed in float (the AVX-512 kernel's first look).
+struct FloatMoments {
+    alignas(64) float v[9][kLanes] = {};
+    double total(int k) const {
+        double sum = 0.0;
+        for (float x : v[k]) sum += static_cast<double>(x);
+        return sum;
+    }
+};
+
+/// Covariance times count from the totals of moments x, y, z, xx, xy, xz, yy, yz, zz.
+template <typename Moments>
+Eigen::Matrix3d covariance_of(const Moments& moments, std::size_t n) {
+    const double count = static_cast<double>(n);
+    const double mean[3] = {moments.total(0) / count, moments.total(1) / count,
+                            moments.total(2) / count};
+    Eigen::Matrix3d covariance;
+    int m = 3;
+    for (int k = 0; k < 3; ++k)
+        for (int j = k; j < 3; ++j) {
+            covariance(k, j) = covariance(j, k) = moments.total(m++) - count * mean[k] * mean[j];
+        }
+    return covariance;
+}
+
+/// Eigenvalues of a covariance, ascending.
+Eigen::Vector3d eigenvalues_of(const Eigen::Matrix3d& covariance) {
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
+        .eigenvalues();
+}
+
 /// x, y and z of 16 consecutive points (48 floats).
 ESF_TARGET_AVX512 inline void load16(const float* p, __m512& x, __m512& y, __m512& z) {
     const __m512 a = _mm512_loadu_ps(p), b = _mm512_loadu_ps(p + 16), c = _mm512_loadu_ps(p + 32);
@@ -57,12 +89,6 @@ ESF_TARGET_AVX512 inline void load16(const float* p, __m512& x, __m512& y, __m51
 ESF_TARGET_AVX512 inline __m256 half8(__m512 v, int which) {
     return which == 0 ? _mm512_castps512_ps256(v)
                       : _mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(v), 1));
-}
-
-ESF_TARGET_AVX512 inline void add_lanes(double* lanes, __m512 v) {
-    const __m512d lo = _mm512_cvtps_pd(half8(v, 0)), hi = _mm512_cvtps_pd(half8(v, 1));
-    _mm512_storeu_pd(lanes, _mm512_add_pd(_mm512_loadu_pd(lanes), lo));
-    _mm512_storeu_pd(lanes + 8, _mm512_add_pd(_mm512_loadu_pd(lanes + 8), hi));
 }
 
 /// Sums of the first `blocks` x 16 points (AVX-512).
@@ -128,7 +154,9 @@ ESF_TARGET_AVX512 inline __m512 scale16(__m512 v, __m512d centre, __m512d scale)
 /// `cells`, the moments to `moments`.
 ESF_TARGET_AVX512 void voxelise_avx512(const float* p, std::size_t blocks, const Normalisation& t,
                                        int half, PackedPoint* packed, std::uint32_t* cells,
-                                       LaneMoments& moments) {
+                                       FloatMoments& moments) {
+    __m512 sums[9];
+    for (int m = 0; m < 9; ++m) sums[m] = _mm512_load_ps(moments.v[m]);
     const __m512d centre[3] = {_mm512_set1_pd(t.cx), _mm512_set1_pd(t.cy), _mm512_set1_pd(t.cz)};
     const __m512d scale = _mm512_set1_pd(t.scale);
     for (std::size_t b = 0; b < blocks; ++b) {
@@ -156,20 +184,27 @@ ESF_TARGET_AVX512 void voxelise_avx512(const float* p, std::size_t blocks, const
             _mm_store_ps(out + 4 * (8 + j), _mm512_extractf32x4_ps(r[j], 2));
             _mm_store_ps(out + 4 * (12 + j), _mm512_extractf32x4_ps(r[j], 3));
         }
-        for (int k = 0; k < 3; ++k) add_lanes(moments.v[k], v[k]);
+        for (int k = 0; k < 3; ++k) sums[k] = _mm512_add_ps(sums[k], v[k]);
         int m = 3;
         for (int k = 0; k < 3; ++k)
-            for (int j = k; j < 3; ++j) {
-                // Products in double, as the portable code forms them.
-                double* lanes = moments.v[m++];
-                for (int h = 0; h < 2; ++h) {
-                    const __m512d a = _mm512_cvtps_pd(half8(v[k], h));
-                    const __m512d c = _mm512_cvtps_pd(half8(v[j], h));
-                    _mm512_storeu_pd(lanes + 8 * h, _mm512_add_pd(_mm512_loadu_pd(lanes + 8 * h),
-                                                                  _mm512_mul_pd(a, c)));
-                }
-            }
+            for (int j = k; j < 3; ++j, ++m) sums[m] = _mm512_fmadd_ps(v[k], v[j], sums[m]);
     }
+    for (int m = 0; m < 9; ++m) _mm512_store_ps(moments.v[m], sums[m]);
+}
+
+/// The moments in double of the first `count` packed points (lane i % 16), as the portable code
+/// sums them.
+LaneMoments packed_moments(const PackedPoint* packed, std::size_t count) {
+    LaneMoments moments;
+    for (std::size_t i = 0; i < count; ++i) {
+        const double d[3] = {packed[i].x, packed[i].y, packed[i].z};
+        const std::size_t l = i % kLanes;
+        for (int k = 0; k < 3; ++k) moments.v[k][l] += d[k];
+        int m = 3;
+        for (int k = 0; k < 3; ++k)
+            for (int j = k; j < 3; ++j) moments.v[m++][l] += d[k] * d[j];
+    }
+    return moments;
 }
 
 // AVX2 kernels: 16 points as two halves of 8, each coordinate as four vectors of 4 doubles.
@@ -413,18 +448,25 @@ NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int h
     return NormaliseOutcome::kNormalised;
 }
 
-Eigen::Matrix3d voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisation& t,
-                                int half, SimdLevel simd, std::vector<PackedPoint>& packed,
-                                std::vector<std::uint32_t>& cells, VoxelGrid& grid) {
+bool on_one_line(const Eigen::Matrix3d& covariance) {
+    const Eigen::Vector3d eigenvalues = eigenvalues_of(covariance);  // ascending
+    return eigenvalues[1] <= 1e-10 * eigenvalues[2];
+}
+
+bool voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisation& t, int half,
+                     SimdLevel simd, std::vector<PackedPoint>& packed,
+                     std::vector<std::uint32_t>& cells, VoxelGrid& grid) {
     const std::size_t n = points.size();
     packed.resize(n + 1);  // + a readable padding point for 16-byte loads
     packed[n] = {};
     cells.resize(n);
     const std::size_t blocks = simd != SimdLevel::kPortable ? n / kLanes : 0;
+    const bool first_look = blocks > 0 && simd == SimdLevel::kAvx512;
     LaneMoments moments;
-    if (blocks > 0 && simd == SimdLevel::kAvx512)
+    FloatMoments float_moments;
+    if (first_look)
         voxelise_avx512(points.data()->data(), blocks, t, half, packed.data(), cells.data(),
-                        moments);
+                        float_moments);
     else if (blocks > 0)
         voxelise_avx2(points.data()->data(), blocks, t, half, packed.data(), cells.data(), moments);
     for (std::size_t i = blocks * kLanes; i < n; ++i) {
@@ -436,22 +478,27 @@ Eigen::Matrix3d voxelise_points(std::span<const Eigen::Vector3f> points, const N
         packed[i] = {x, y, z, cells[i]};
         const double d[3] = {x, y, z};
         const std::size_t l = i % kLanes;
-        for (int k = 0; k < 3; ++k) moments.v[k][l] += d[k];
         int m = 3;
-        for (int k = 0; k < 3; ++k)
-            for (int j = k; j < 3; ++j) moments.v[m++][l] += d[k] * d[j];
+        for (int k = 0; k < 3; ++k) {
+            moments.v[k][l] += d[k];
+            float_moments.v[k][l] += static_cast<float>(d[k]);
+            for (int j = k; j < 3; ++j, ++m) {
+                moments.v[m][l] += d[k] * d[j];
+                float_moments.v[m][l] += static_cast<float>(d[k] * d[j]);
+            }
+        }
     }
     set_cells(cells.data(), n, grid);
-    const double count = static_cast<double>(n);
-    const double mean[3] = {moments.total(0) / count, moments.total(1) / count,
-                            moments.total(2) / count};
-    Eigen::Matrix3d covariance;
-    int m = 3;
-    for (int k = 0; k < 3; ++k)
-        for (int j = k; j < 3; ++j) {
-            covariance(k, j) = covariance(j, k) = moments.total(m++) - count * mean[k] * mean[j];
-        }
-    return covariance;
+    if (!first_look) return on_one_line(covariance_of(moments, n));
+    // A sum of at most 2^16 floats per lane errs by at most 2^-8 of the sum of its terms' sizes:
+    // the float covariance then lies within 0.05 of the largest eigenvalue of the exact one, and a
+    // second eigenvalue of at least a fifth of the largest cannot come from a line.
+    constexpr std::size_t kFloatLookMaxPoints = std::size_t{1} << 20;
+    if (n <= kFloatLookMaxPoints) {
+        const Eigen::Vector3d eigenvalues = eigenvalues_of(covariance_of(float_moments, n));
+        if (eigenvalues[2] > 0.0 && eigenvalues[1] >= 0.2 * eigenvalues[2]) return false;
+    }
+    return on_one_line(covariance_of(packed_moments(packed.data(), n), n));
 }
 
 std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLevel simd,
