@@ -150,11 +150,15 @@ ESF_TARGET_AVX512 inline __m512 scale16(__m512 v, __m512d centre, __m512d scale)
     return _mm512_insertf32x8(_mm512_castps256_ps512(lo), hi, 1);
 }
 
-/// Scales, packs and voxelises the first `blocks` x 16 points (AVX-512); their cells go to
-/// `cells`, the moments to `moments`.
-ESF_TARGET_AVX512 void voxelise_avx512(const float* p, std::size_t blocks, const Normalisation& t,
-                                       int half, PackedPoint* packed, std::uint32_t* cells,
-                                       FloatMoments& moments) {
+/// Scales, packs and voxelises the first `blocks` x 16 points (AVX-512); the moments go to
+/// `moments`, and to `cells` each cell that differs from the previous point's (a scan's
+/// neighbouring points often share a cell: the grid then takes one write per run). Returns how
+/// many cells were written (`cells` has room for 16 more than the points).
+ESF_TARGET_AVX512 std::size_t voxelise_avx512(const float* p, std::size_t blocks,
+                                              const Normalisation& t, int half, PackedPoint* packed,
+                                              std::uint32_t* cells, FloatMoments& moments) {
+    std::size_t kept = 0;
+    __m512i previous = _mm512_set1_epi32(-1);  // no cell: the first point always counts
     __m512 sums[9];
     for (int m = 0; m < 9; ++m) sums[m] = _mm512_load_ps(moments.v[m]);
     const __m512d centre[3] = {_mm512_set1_pd(t.cx), _mm512_set1_pd(t.cy), _mm512_set1_pd(t.cz)};
@@ -166,7 +170,12 @@ ESF_TARGET_AVX512 void voxelise_avx512(const float* p, std::size_t blocks, const
         const __m512i cell = _mm512_or_si512(
             _mm512_or_si512(cell16(v[0], half), _mm512_slli_epi32(cell16(v[1], half), 6)),
             _mm512_slli_epi32(cell16(v[2], half), 12));
-        _mm512_storeu_si512(cells + kLanes * b, cell);
+        // Lane l's predecessor: lane l - 1, or the previous block's last lane.
+        const __mmask16 differs =
+            _mm512_cmpneq_epi32_mask(cell, _mm512_alignr_epi32(cell, previous, 15));
+        previous = cell;
+        _mm512_storeu_si512(cells + kept, _mm512_maskz_compress_epi32(differs, cell));
+        kept += static_cast<std::size_t>(std::popcount(static_cast<unsigned>(differs)));
         // Back to x, y, z, cell per point: 4x4 transposes within the 128-bit lanes.
         const __m512 w = _mm512_castsi512_ps(cell);
         const __m512 xy_lo = _mm512_unpacklo_ps(v[0], v[1]), xy_hi = _mm512_unpackhi_ps(v[0], v[1]);
@@ -190,6 +199,7 @@ ESF_TARGET_AVX512 void voxelise_avx512(const float* p, std::size_t blocks, const
             for (int j = k; j < 3; ++j, ++m) sums[m] = _mm512_fmadd_ps(v[k], v[j], sums[m]);
     }
     for (int m = 0; m < 9; ++m) _mm512_store_ps(moments.v[m], sums[m]);
+    return kept;
 }
 
 /// The moments in double of the first `count` packed points (lane i % 16), as the portable code
@@ -464,18 +474,22 @@ bool voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisatio
     const bool first_look = blocks > 0 && simd == SimdLevel::kAvx512;
     LaneMoments moments;
     FloatMoments float_moments;
-    if (first_look)
-        voxelise_avx512(points.data()->data(), blocks, t, half, packed.data(), cells.data(),
-                        float_moments);
-    else if (blocks > 0)
+    std::size_t kept = blocks * kLanes;  // cells written so far
+    if (first_look) {
+        cells.resize(n + kLanes);  // + room for full-width stores
+        kept = voxelise_avx512(points.data()->data(), blocks, t, half, packed.data(), cells.data(),
+                               float_moments);
+    } else if (blocks > 0) {
         voxelise_avx2(points.data()->data(), blocks, t, half, packed.data(), cells.data(), moments);
+    }
     for (std::size_t i = blocks * kLanes; i < n; ++i) {
         const auto& q = points[i];
         const auto x = static_cast<float>((static_cast<double>(q.x()) - t.cx) * t.scale);
         const auto y = static_cast<float>((static_cast<double>(q.y()) - t.cy) * t.scale);
         const auto z = static_cast<float>((static_cast<double>(q.z()) - t.cz) * t.scale);
-        cells[i] = pack_cell(cell_of(x, half), cell_of(y, half), cell_of(z, half));
-        packed[i] = {x, y, z, cells[i]};
+        const std::uint32_t cell = pack_cell(cell_of(x, half), cell_of(y, half), cell_of(z, half));
+        packed[i] = {x, y, z, cell};
+        cells[kept++] = cell;
         const double d[3] = {x, y, z};
         const std::size_t l = i % kLanes;
         int m = 3;
@@ -488,7 +502,7 @@ bool voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisatio
             }
         }
     }
-    set_cells(cells.data(), n, grid);
+    set_cells(cells.data(), kept, grid);
     if (!first_look) return on_one_line(covariance_of(moments, n));
     // A sum of at most 2^16 floats per lane errs by at most 2^-8 of the sum of its terms' sizes:
     // the float covariance then lies within 0.05 of the largest eigenvalue of the exact one, and a

@@ -50,11 +50,12 @@ std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLeve
 /// most 1e-10 of the largest.
 bool on_one_line(const Eigen::Matrix3d& covariance);
 
-/// Scales every point, stores it with its cell in `packed` (plus one zero padding point) and
-/// `cells`, and sets the cells in `grid` (not cleared first). Returns whether the scaled points
-/// lie on one line: on_one_line() of their covariance, its moments summed in double. The AVX-512
-/// kernel first sums them in float; when that covariance's second eigenvalue is at least a fifth
-/// of the largest, far beyond the float sums' error, the answer is no without the doubles.
+/// Scales every point, stores it with its cell in `packed` (plus one zero padding point), and
+/// sets the cells in `grid` (not cleared first); `cells` is scratch for the cells to set. Returns
+/// whether the scaled points lie on one line: on_one_line() of their covariance, its moments summed
+/// in double. The AVX-512 kernel first sums them in float; when that covariance's second eigenvalue
+/// is at least a fifth of the largest, far beyond the float sums' error, the answer is no without
+/// the doubles.
 bool voxelise_points(std::span<const Eigen::Vector3f> points, const Normalisation& t, int half,
                      SimdLevel simd, std::vector<PackedPoint>& packed,
                      std::vector<std::uint32_t>& cells, VoxelGrid& grid);

@@ -9,6 +9,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <random>
@@ -183,6 +184,66 @@ TEST(EsfDescriptor, PortableCodeGivesTheSimdKernelsOutputWithNonFinitePoints) {
         esf::EsfOptions best;
         best.samples = samples;
         expect_kernels_agree(points, best, std::to_string(samples) + " samples");
+    }
+}
+
+// A scan in row order: runs of neighbouring points share a cell, which the AVX-512 kernel sets
+// once per run (runs across its blocks of 16 included).
+TEST(EsfDescriptor, KernelsAgreeOnCloudsInScanOrder) {
+    esf::Points scan;
+    for (int row = 0; row < 60; ++row)
+        for (int column = 0; column < 157; ++column) {
+            const float u = 0.004f * static_cast<float>(column),
+                        v = 0.004f * static_cast<float>(row);
+            scan.emplace_back(u, v, 0.3f * std::sin(4.0f * u) + 0.1f * v * v);
+        }
+    scan.insert(scan.begin() + 500, 40, scan[500]);  // a run of equal points
+    esf::EsfOptions options;
+    options.samples = 3000;
+    expect_kernels_agree(scan, options, "scan");
+}
+
+// The voxel grid and packed points of every kernel against the portable code, for point orders
+// with runs of one cell, alternating cells (A B A) and random cells, across blocks of 16.
+TEST(EsfPoints, EveryKernelSetsTheSameGrid) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> coordinate(-1.0f, 1.0f);
+    std::vector<std::pair<std::string, esf::Points>> clouds;
+    esf::Points runs, alternating, random;
+    for (int i = 0; i < 1000; ++i) {
+        const Eigen::Vector3f a(coordinate(rng), coordinate(rng), coordinate(rng));
+        const Eigen::Vector3f b(coordinate(rng), coordinate(rng), coordinate(rng));
+        for (int k = 0; k < i % 7 + 1; ++k) runs.push_back(a);
+        alternating.push_back(a);
+        alternating.push_back(b);
+        alternating.push_back(a);
+        random.push_back(a);
+    }
+    clouds = {{"runs", runs}, {"alternating", alternating}, {"random", random}};
+    namespace d = esf::detail;
+    for (const auto& [name, points] : clouds) {
+        d::Normalisation t;
+        ASSERT_EQ(d::normalise_points(points, 32, d::SimdLevel::kPortable, t),
+                  d::NormaliseOutcome::kNormalised);
+        std::vector<d::PackedPoint> reference_packed;
+        std::vector<std::uint32_t> cells;
+        d::VoxelGrid reference;
+        reference.clear();
+        d::voxelise_points(points, t, 32, d::SimdLevel::kPortable, reference_packed, cells,
+                           reference);
+        for (const d::SimdLevel simd : {d::SimdLevel::kAvx512, d::SimdLevel::kAvx2}) {
+            if (simd == d::SimdLevel::kAvx512 && !d::esf_avx512_available()) continue;
+            if (simd == d::SimdLevel::kAvx2 && !d::esf_avx2_available()) continue;
+            std::vector<d::PackedPoint> packed;
+            d::VoxelGrid grid;
+            grid.clear();
+            d::voxelise_points(points, t, 32, simd, packed, cells, grid);
+            EXPECT_TRUE(grid.words == reference.words) << name;
+            ASSERT_EQ(packed.size(), reference_packed.size()) << name;
+            EXPECT_EQ(0, std::memcmp(packed.data(), reference_packed.data(),
+                                     packed.size() * sizeof(d::PackedPoint)))
+                << name;
+        }
     }
 }
 
