@@ -165,12 +165,13 @@ ESF_TARGET_AVX512 inline __m512 dot16(__m512 ax, __m512 ay, __m512 az, __m512 bx
 ESF_TARGET_AVX512 inline __m512i next16(__m512i& s0, __m512i& s1, __m512i& s2, __m512i& s3) {
     const __m512i result = _mm512_add_epi32(_mm512_rol_epi32(_mm512_add_epi32(s0, s3), 7), s0);
     const __m512i t = _mm512_slli_epi32(s1, 9);
-    s2 = _mm512_xor_si512(s2, s0);
-    s3 = _mm512_xor_si512(s3, s1);
-    s1 = _mm512_xor_si512(s1, s2);
-    s0 = _mm512_xor_si512(s0, s3);
-    s2 = _mm512_xor_si512(s2, t);
-    s3 = _mm512_rol_epi32(s3, 11);
+    // The update with three-way xors (0x96: a ^ b ^ c) of the old state.
+    const __m512i s1_next = _mm512_ternarylogic_epi32(s1, s2, s0, 0x96);
+    const __m512i s3_mixed = _mm512_xor_si512(s3, s1);
+    s2 = _mm512_ternarylogic_epi32(s2, s0, t, 0x96);
+    s0 = _mm512_xor_si512(s0, s3_mixed);
+    s1 = s1_next;
+    s3 = _mm512_rol_epi32(s3_mixed, 11);
     return result;
 }
 
@@ -253,14 +254,6 @@ ESF_TARGET_AVX512 inline void gather16(const PackedPoint* points, __m512i index,
     cell = _mm512_permutex2var_epi32(zc0, odd, zc1);
 }
 
-/// Stores the lanes of `keep`, in order, to dst[0 .. popcount(keep)).
-ESF_TARGET_AVX512 inline void put16(std::uint32_t* dst, __mmask16 keep, __mmask16 out, __m512i v) {
-    _mm512_mask_storeu_epi32(dst, out, _mm512_maskz_compress_epi32(keep, v));
-}
-ESF_TARGET_AVX512 inline void put16(float* dst, __mmask16 keep, __mmask16 out, __m512 v) {
-    _mm512_mask_storeu_ps(dst, out, _mm512_maskz_compress_ps(keep, v));
-}
-
 ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint32_t count,
                                             std::uint64_t seed, std::size_t max_attempts,
                                             float min_heron, TriangleSet& set) {
@@ -340,16 +333,25 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
         const __m512 d3 = _mm512_sqrt_ps(_mm512_sqrt_ps(heron));
         const std::size_t at = done.accepted;
         const __mmask16 out = static_cast<__mmask16>((1u << got) - 1u);
-        put16(&set.d2[at], keep, out, a);
-        put16(&set.d2[samples + at], keep, out, b);
-        put16(&set.d2[2 * samples + at], keep, out, c);
-        put16(&set.d3[at], keep, out, d3);
-        put16(&set.line_start[at], keep, out, c1);
-        put16(&set.line_end[at], keep, out, c2);
-        put16(&set.line_start[samples + at], keep, out, c1);
-        put16(&set.line_end[samples + at], keep, out, c3);
-        put16(&set.line_start[2 * samples + at], keep, out, c2);
-        put16(&set.line_end[2 * samples + at], keep, out, c3);
+        // The kept lanes, in order: one compress of the lane numbers, then a permute per array.
+        const __m512i order = _mm512_maskz_compress_epi32(
+            keep, _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
+        const auto put = [&](float* dst, __m512 v) ESF_TARGET_AVX512 {
+            _mm512_mask_storeu_ps(dst, out, _mm512_permutexvar_ps(order, v));
+        };
+        put(&set.d2[at], a);
+        put(&set.d2[samples + at], b);
+        put(&set.d2[2 * samples + at], c);
+        put(&set.d3[at], d3);
+        const __m512i k1 = _mm512_permutexvar_epi32(order, c1);
+        const __m512i k2 = _mm512_permutexvar_epi32(order, c2);
+        const __m512i k3 = _mm512_permutexvar_epi32(order, c3);
+        _mm512_mask_storeu_epi32(&set.line_start[at], out, k1);
+        _mm512_mask_storeu_epi32(&set.line_end[at], out, k2);
+        _mm512_mask_storeu_epi32(&set.line_start[samples + at], out, k1);
+        _mm512_mask_storeu_epi32(&set.line_end[samples + at], out, k3);
+        _mm512_mask_storeu_epi32(&set.line_start[2 * samples + at], out, k2);
+        _mm512_mask_storeu_epi32(&set.line_end[2 * samples + at], out, k3);
         max_d2 = _mm512_mask_max_ps(max_d2, keep, max_d2, _mm512_max_ps(_mm512_max_ps(a, b), c));
         max_d3 = _mm512_mask_max_ps(max_d3, keep, max_d3, d3);
         done.accepted += static_cast<std::size_t>(got);
