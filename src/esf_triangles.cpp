@@ -933,23 +933,35 @@ EsfCounts histogram_triangles(const TriangleSet& set, const std::uint32_t* occup
         else
             histogram_block_scalar(set, occupied, visited, first, lanes, pcl_division, d2_scale,
                                    d3_scale, block);
-        // Two lanes' positions per load (the increments are bound by memory operations).
+        // Four lanes at a time, one per copy, their increments interleaved: a triangle's next
+        // increment to its copy comes three others later, so a repeated bin (two lines of one
+        // triangle in one bin) does not wait on the store before. Two lanes' positions per load
+        // (the increments are bound by memory operations).
+        static_assert(kCopies == 4);
         std::size_t l = 0;
-        for (; l + 2 <= lanes; l += 2) {
-            std::uint32_t* first_copy = tally.data() + (l % kCopies) * kCopyBins;
-            std::uint32_t* second_copy = tally.data() + ((l + 1) % kCopies) * kCopyBins;
+        for (; l + 4 <= lanes; l += 4) {
+            std::uint32_t* copy[4];
+            for (std::size_t c = 0; c < 4; ++c) copy[c] = tally.data() + c * kCopyBins;
             for (int k = 0; k < 4; ++k) {
-                std::uint64_t bins;
-                std::memcpy(&bins, &block.bins[k][l], sizeof bins);
-                ++first_copy[static_cast<std::uint32_t>(bins)];
-                ++second_copy[bins >> 32];
+                std::uint64_t low, high;
+                std::memcpy(&low, &block.bins[k][l], sizeof low);
+                std::memcpy(&high, &block.bins[k][l + 2], sizeof high);
+                ++copy[0][static_cast<std::uint32_t>(low)];
+                ++copy[1][low >> 32];
+                ++copy[2][static_cast<std::uint32_t>(high)];
+                ++copy[3][high >> 32];
             }
             for (int k = 0; k < 3; ++k) {
-                std::uint64_t bins, weights;
-                std::memcpy(&bins, &block.bins[4 + k][l], sizeof bins);
-                std::memcpy(&weights, &block.weight[k][l], sizeof weights);
-                first_copy[static_cast<std::uint32_t>(bins)] += static_cast<std::uint32_t>(weights);
-                second_copy[bins >> 32] += static_cast<std::uint32_t>(weights >> 32);
+                std::uint64_t low, high, low_weights, high_weights;
+                std::memcpy(&low, &block.bins[4 + k][l], sizeof low);
+                std::memcpy(&high, &block.bins[4 + k][l + 2], sizeof high);
+                std::memcpy(&low_weights, &block.weight[k][l], sizeof low_weights);
+                std::memcpy(&high_weights, &block.weight[k][l + 2], sizeof high_weights);
+                copy[0][static_cast<std::uint32_t>(low)] += static_cast<std::uint32_t>(low_weights);
+                copy[1][low >> 32] += static_cast<std::uint32_t>(low_weights >> 32);
+                copy[2][static_cast<std::uint32_t>(high)] +=
+                    static_cast<std::uint32_t>(high_weights);
+                copy[3][high >> 32] += static_cast<std::uint32_t>(high_weights >> 32);
             }
         }
         for (; l < lanes; ++l) {
