@@ -367,14 +367,20 @@ ESF_TARGET_AVX2 void voxelise_avx2(const float* p, std::size_t blocks, const Nor
 /// wait for its predecessor's (branches on word changes would mispredict, a single copy would
 /// serialise on store forwarding).
 void set_cells(const std::uint32_t* cells, std::size_t count, VoxelGrid& grid) {
-    std::array<std::uint64_t, kGridWords> odd{};
-    std::size_t i = 0;
-    for (; i + 1 < count; i += 2) {
-        grid.words[cells[i] >> 6] |= std::uint64_t{1} << (cells[i] & 63);
-        odd[cells[i + 1] >> 6] |= std::uint64_t{1} << (cells[i + 1] & 63);
+    // Four runs through the cells at once (each a quarter, in order): neighbouring cells often
+    // share a word of the grid, and one run's read-modify-writes of it then do not hold up the
+    // others'.
+    const std::size_t quarter = count / 4;
+    const auto set = [&grid](std::uint32_t cell) {
+        grid.words[cell >> 6] |= std::uint64_t{1} << (cell & 63);
+    };
+    for (std::size_t i = 0; i < quarter; ++i) {
+        set(cells[i]);
+        set(cells[quarter + i]);
+        set(cells[2 * quarter + i]);
+        set(cells[3 * quarter + i]);
     }
-    if (i < count) grid.words[cells[i] >> 6] |= std::uint64_t{1} << (cells[i] & 63);
-    for (std::size_t w = 0; w < grid.words.size(); ++w) grid.words[w] |= odd[w];
+    for (std::size_t i = 4 * quarter; i < count; ++i) set(cells[i]);
 }
 
 /// The finite points of the first `blocks` x 16 points, in order, to `out` (which has 16 floats of

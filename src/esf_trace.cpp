@@ -277,10 +277,9 @@ void sort_lines(std::span<const std::uint64_t> records, std::span<const std::uin
     for (std::size_t i = 0; i < visited.size(); ++i) sorted[bucket[visited[i]]++] = records[i];
 }
 
-/// Cells x + dx (dx = 0, 1, 2) of word `at` of `words` for x = 0 .. 63, as bits dx of 64
-/// bytes. Past x = 63 the cells continue into the next word (the cube table is linear).
-ESF_TARGET_AVX512 inline __m512i cell_triples(const std::uint64_t* at) {
-    const std::uint64_t low = at[0], high = at[1];
+/// Cells x + dx (dx = 0, 1, 2) of a word `low` for x = 0 .. 63, as bits dx of 64 bytes. Past
+/// x = 63 the cells continue into the next word, `high` (the cube table is linear).
+ESF_TARGET_AVX512 inline __m512i cell_triples(std::uint64_t low, std::uint64_t high) {
     const __m512i one = _mm512_set1_epi8(1), two = _mm512_set1_epi8(2);
     const __m512i four = _mm512_set1_epi8(4);
     return _mm512_ternarylogic_epi32(_mm512_maskz_mov_epi8(low, one),
@@ -307,27 +306,37 @@ inline void for_each_bit(const std::uint64_t* bits, int from, int to, F&& f) {
 /// rows with a cell in each layer let the work skip empty rows: their cubes are zero, and
 /// `dirty_rows` marks the table rows that are not, so a later grid clears only those.
 ESF_TARGET_AVX512 void build_cubes(const VoxelGrid& grid, TraceScratch& scratch) {
-    // Zero words before and after the grid: table rows start kCubeWordPad words before it, and
-    // each reads 131 words ahead.
+    // Rows are counted from kCubeWordPad words before the grid, and each reads up to 131 words
+    // ahead (zero past the grid's ends).
     constexpr int kWords = kCubeWordPad + kGridWords + kCubeWordPad;
-    constexpr int kRows = kCubeWordPad + kGridWords;  // table rows, from word 0 of `words`
+    constexpr int kRows = kCubeWordPad + kGridWords;  // table rows
     constexpr int kChunks = kWords / 64 + 4;          // bitmap words, zero past the end
     constexpr int kRowChunks = (kRows + 63) / 64;
     constexpr int kRing = 256;  // S rows kept: 129 are read
-    static_assert(kWords % 8 == 0 && kCubeWordPad >= 2 * kGridSide + 4 &&
-                  kRing > 2 * kGridSide + 2);
-    alignas(64) std::array<std::uint64_t, kWords> words{};
-    std::copy(grid.words.begin(), grid.words.end(), words.begin() + kCubeWordPad);
+    static_assert(kCubeWordPad >= 2 * kGridSide + 4 && kRing > 2 * kGridSide + 2);
+    // Word `row` of the grid with kCubeWordPad zero words before it and after it.
+    const auto word = [&grid](int row) {
+        const int at = row - kCubeWordPad;
+        return at >= 0 && at < kGridWords ? grid.words[static_cast<std::size_t>(at)]
+                                          : std::uint64_t{0};
+    };
     if (scratch.cubes.empty()) {
         scratch.cubes.assign(static_cast<std::size_t>(kCubePad + kGridCells), 0u);
         scratch.dirty_rows.assign(kRowChunks, 0);
     }
-    // Rows with a cell: in the grid (any), in T (t_any), in S (s_any), in the table (table_any).
+    // Rows with a cell: in the grid (any), in T (t_any), in S (s_any).
     std::array<std::uint64_t, kChunks> any{}, t_any{}, s_any{};
-    for (int w = 0; w < kWords; w += 8) {
-        const __m512i v = _mm512_load_si512(&words[static_cast<std::size_t>(w)]);
-        any[static_cast<std::size_t>(w >> 6)] |= std::uint64_t{_mm512_test_epi64_mask(v, v)}
-                                                 << (w & 63);
+    constexpr int kPadChunks = kCubeWordPad / 64, kPadBits = kCubeWordPad % 64;
+    static_assert(kPadBits > 0 && kGridWords % 64 == 0);
+    for (int w = 0; w < kGridWords; w += 64) {
+        std::uint64_t bits = 0;
+        for (int j = 0; j < 64; j += 8) {
+            const __m512i v = _mm512_loadu_si512(&grid.words[static_cast<std::size_t>(w + j)]);
+            bits |= std::uint64_t{_mm512_test_epi64_mask(v, v)} << j;
+        }
+        const auto c = static_cast<std::size_t>(w / 64 + kPadChunks);
+        any[c] |= bits << kPadBits;
+        any[c + 1] |= bits >> (64 - kPadBits);
     }
     // Row r + k of a bitmap, for rows r of chunk c (k < 64).
     const auto ahead = [](const std::array<std::uint64_t, kChunks>& bits, std::size_t c, int k) {
@@ -345,7 +354,7 @@ ESF_TARGET_AVX512 void build_cubes(const VoxelGrid& grid, TraceScratch& scratch)
     int t_next = 0, s_next = 0;  // the rows of T and S not formed yet start here
     const auto form_t = [&](int upto) ESF_TARGET_AVX512 {  // T of the rows < upto
         for_each_bit(t_any.data(), t_next, upto, [&](int row) ESF_TARGET_AVX512 {
-            const __m512i bytes = cell_triples(&words[static_cast<std::size_t>(row)]);
+            const __m512i bytes = cell_triples(word(row), word(row + 1));
             std::uint16_t* out = t_rows[row & 3];
             _mm512_store_si512(out, _mm512_cvtepu8_epi16(_mm512_castsi512_si256(bytes)));
             _mm512_store_si512(out + 32, _mm512_cvtepu8_epi16(_mm512_extracti64x4_epi64(bytes, 1)));
