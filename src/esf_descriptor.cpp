@@ -333,10 +333,13 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
                         std::span(triangles.line_end).first(lines),
                         std::span(ws.occupied).first(lines), std::span(ws.visited).first(lines),
                         ws.trace, kernel, detail::LineEnds::kSetBeforeDilation);
-    if (trial)
-        ws.trials.record(
-            kernel,
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count());
+    if (trial) {
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count();
+        std::size_t cells = 0;
+        for (std::size_t i = 0; i < lines; ++i) cells += ws.visited[i];
+        ws.trials.record(kernel, seconds, cells);
+    }
 
     // Histograms, counted in integers: every value the reference accumulates in float is a
     // multiple of 1/32 far below 2^24 / 32, so integer sums converted at the end are identical.

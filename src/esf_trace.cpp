@@ -595,14 +595,19 @@ TraceKernel TraceKernelTrials::next() const {
     return decided_ ? chosen_ : candidates_[calls_ % candidates_.size()];
 }
 
-void TraceKernelTrials::record(TraceKernel kernel, double seconds) {
+void TraceKernelTrials::record(TraceKernel kernel, double seconds, std::size_t cells) {
     if (decided_) return;
     const auto k = static_cast<std::size_t>(
         std::find(candidates_.begin(), candidates_.end(), kernel) - candidates_.begin());
-    if (k < best_.size()) best_[k] = std::min(best_[k], seconds);
+    if (k < best_.size())
+        best_[k] =
+            std::min(best_[k], seconds / static_cast<double>(std::max<std::size_t>(cells, 1)));
     if (++calls_ < kRounds * candidates_.size()) return;
-    chosen_ = candidates_[static_cast<std::size_t>(std::min_element(best_.begin(), best_.end()) -
-                                                   best_.begin())];
+    // The widest (candidate 0) unless another is faster by the margin.
+    std::size_t choice = 0;
+    for (std::size_t c = 1; c < best_.size(); ++c)
+        if (best_[c] < (1.0 - kMargin) * best_[0] && best_[c] < best_[choice]) choice = c;
+    chosen_ = candidates_[choice];
     decided_ = true;
 }
 

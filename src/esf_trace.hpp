@@ -87,21 +87,24 @@ const char* trace_kernel_name();
 
 /// Picks the fastest tracing kernel on this CPU by timing the real work: an estimator's first
 /// calls try each SIMD kernel the CPU supports in turn (kRounds rounds, the widest first), and
-/// the one with the least time then traces every later call. Gathers, on which the AVX-512
+/// the one with the least time per visited cell (calls trace different clouds) then traces every
+/// later call. A narrower kernel must beat the widest by kMargin: two kernels within the noise of
+/// each other must not make the choice a coin toss. Gathers, on which the AVX-512
 /// kernels lean, cost very differently across CPUs, so the widest kernel need not be the
 /// fastest. Every kernel gives the same counts: only the speed depends on the choice. Each
 /// estimator holds its own (no shared state).
 class TraceKernelTrials {
   public:
     static constexpr int kRounds = 3;
+    static constexpr double kMargin = 0.05;
 
     TraceKernelTrials();
     /// Whether the choice is made (at once when the CPU offers one kernel).
     bool decided() const { return decided_; }
     /// The kernel for the next call: the next one to try, or the choice.
     TraceKernel next() const;
-    /// Records how long `kernel` (the value next() gave) took.
-    void record(TraceKernel kernel, double seconds);
+    /// Records how long `kernel` (the value next() gave) took to visit `cells` cells.
+    void record(TraceKernel kernel, double seconds, std::size_t cells);
 
   private:
     std::vector<TraceKernel> candidates_;

@@ -705,6 +705,28 @@ TEST(FinitePoints, EveryPathKeepsTheFinitePointsInOrder) {
     }
 }
 
+// Times are compared per visited cell (calls trace different clouds), and a narrower kernel must
+// beat the widest by the margin.
+TEST(TraceKernelTrials, ComparesTimePerCellAndKeepsTheWidestWithinTheMargin) {
+    using esf::detail::TraceKernel;
+    using esf::detail::TraceKernelTrials;
+    for (const double narrower_speed : {0.98, 0.90}) {  // time per cell against the widest
+        TraceKernelTrials trials;
+        if (trials.decided()) return;  // one kernel on this CPU
+        while (!trials.decided()) {
+            const TraceKernel kernel = trials.next();
+            // The widest traces twice the cells in twice the time: the same time per cell.
+            if (kernel == TraceKernel::kBest)
+                trials.record(kernel, 2.0, 2000);
+            else
+                trials.record(kernel, narrower_speed, 1000);
+        }
+        EXPECT_EQ(trials.next() == TraceKernel::kBest,
+                  narrower_speed > 1.0 - TraceKernelTrials::kMargin)
+            << narrower_speed;
+    }
+}
+
 TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
     using esf::detail::TraceKernel;
     esf::detail::TraceKernelTrials trials;
@@ -718,7 +740,7 @@ TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
         tried.push_back(kernel);
         // The AVX2 kernel is made the fastest after the first round (at most three kernels).
         const bool later_round = tried.size() > 3;
-        trials.record(kernel, kernel == TraceKernel::kAvx2 && later_round ? 1.0 : 2.0);
+        trials.record(kernel, kernel == TraceKernel::kAvx2 && later_round ? 1.0 : 2.0, 1000);
     }
     ASSERT_TRUE(trials.decided());
     const std::size_t kinds = tried.size() / esf::detail::TraceKernelTrials::kRounds;
@@ -726,6 +748,6 @@ TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
     EXPECT_EQ(tried.front(), TraceKernel::kBest);  // the widest first
     for (std::size_t i = kinds; i < tried.size(); ++i) EXPECT_EQ(tried[i], tried[i - kinds]);
     EXPECT_EQ(trials.next(), TraceKernel::kAvx2);
-    trials.record(TraceKernel::kAvx2, 100.0);  // the choice stays
+    trials.record(TraceKernel::kAvx2, 100.0, 1000);  // the choice stays
     EXPECT_EQ(trials.next(), TraceKernel::kAvx2);
 }
