@@ -202,16 +202,11 @@ std::size_t lzf_compress(std::span<const unsigned char> in, std::span<unsigned c
     return op;
 }
 
-LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out,
-                          std::size_t wanted) {
+LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out) {
     const unsigned char* ip = in.data();
     const unsigned char* const in_end = ip + in.size();
     unsigned char* op = out.data();
     unsigned char* const out_end = op + out.size();
-    // Where decoding may stop early: never when the whole output is wanted (the rest of the
-    // input is then checked to the end).
-    const bool early = wanted < out.size();
-    unsigned char* const stop = early ? op + wanted : out_end;
     LzfDecoded result;
     auto corrupt = [&](const char* why) {
         result.error = why;
@@ -226,8 +221,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
     if (in.size() >= kFastInput && out.size() >= kFastOutput) {
         const unsigned char* const in_fast_end = in_end - kFastInput;
         unsigned char* const out_fast_end = out_end - kFastOutput;
-        unsigned char* const fast_stop = std::min(out_fast_end + 1, stop);  // both <= out_end
-        while (ip <= in_fast_end && op < fast_stop) {
+        while (ip <= in_fast_end && op <= out_fast_end) {
             const std::size_t ctrl = *ip++;
             if (ctrl < 32) {  // literal run of ctrl + 1 bytes: one 32-byte copy serves any length
                 std::memcpy(op, ip, kMaxLiteral);
@@ -260,7 +254,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
     }
 
     // Careful loop for the last tokens (and small blocks): every length checked, exact copies.
-    while (ip < in_end && !(early && op >= stop)) {
+    while (ip < in_end) {
         const std::size_t ctrl = *ip++;
         if (ctrl < 32) {  // literal run of ctrl + 1 bytes
             const std::size_t len = ctrl + 1;

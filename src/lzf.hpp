@@ -36,14 +36,6 @@ struct LzfDecoded {
 /// `out` not yet written may be read (and masked off: they never reach the output). The PCD
 /// reader passes memory it has not cleared: zeroing 6 MB for every 640 x 480 scene would cost
 /// 5 % of reading it.
-///
-/// With `wanted` below out.size(), decoding stops at the first token that brings the output to
-/// `wanted` bytes or more (`produced` may exceed it); the rest of the input is not read, so damage
-/// there goes unseen. The PCD reader decodes only up to the last column it keeps.
-LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out,
-                          std::size_t wanted);
-inline LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out) {
-    return lzf_decompress(in, out, out.size());
-}
+LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out);
 
 }  // namespace esf::detail

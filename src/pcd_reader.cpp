@@ -192,29 +192,26 @@ void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::s
                  " compressed bytes cannot hold " + str(uncompressed) + " bytes");
     }
     const auto size = static_cast<std::size_t>(uncompressed);
-    std::vector<std::uint64_t> start(h.fields.size()), stride(h.fields.size());
-    std::uint64_t offset = 0, wanted = 0;
-    for (std::size_t f = 0; f < h.fields.size(); ++f) {
-        stride[f] = h.fields[f].bytes();
-        start[f] = offset;
-        if (keep_padding || !h.fields[f].padding()) offset += h.points * stride[f];
-        if (f == h.x || f == h.y || f == h.z || (h.label && f == *h.label)) wanted = offset;
-    }
     auto buffer = std::make_unique_for_overwrite<unsigned char[]>(std::max<std::size_t>(size, 1));
-    // Decoded up to the end of the last column read: the fields after it (colours, normals) are
-    // never decoded.
     const LzfDecoded decoded = lzf_decompress(
         {reinterpret_cast<const unsigned char*>(base + 8), static_cast<std::size_t>(compressed)},
-        {buffer.get(), size}, static_cast<std::size_t>(wanted));
+        {buffer.get(), size});
     if (decoded.error) {
         fail(name, 0,
              std::string("corrupt LZF data in binary_compressed block: ") + decoded.error +
                  " (compressed byte " + str(decoded.at) + ")");
     }
-    if (decoded.produced < wanted || (wanted == size && decoded.produced != size)) {
+    if (decoded.produced != size) {
         fail(name, 0,
              "corrupt binary_compressed data: decompressed to " + str(decoded.produced) +
                  " bytes, expected " + str(uncompressed));
+    }
+    std::vector<std::uint64_t> start(h.fields.size()), stride(h.fields.size());
+    std::uint64_t offset = 0;
+    for (std::size_t f = 0; f < h.fields.size(); ++f) {
+        stride[f] = h.fields[f].bytes();
+        start[f] = offset;
+        if (keep_padding || !h.fields[f].padding()) offset += h.points * stride[f];
     }
     read_pcd_fields(reinterpret_cast<const char*>(buffer.get()), h, start, stride, name, cloud);
 }

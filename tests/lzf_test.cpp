@@ -132,39 +132,6 @@ TEST(Lzf, CorruptInputIsReportedNotOverrun) {
     EXPECT_STREQ(r.error, "back reference cut off");
 }
 
-// Decoding up to `wanted` bytes: the first wanted bytes are right, decoding stops within one
-// token (at most 264 bytes) past them, and damage further on is not read; the whole output
-// (wanted = size) still checks the input to its end.
-TEST(Lzf, StopsSoonAfterTheWantedBytes) {
-    for (const auto& [name, raw] : inputs()) {
-        if (raw.size() < 100) continue;
-        SCOPED_TRACE(name);
-        const Bytes packed = compress(raw);
-        for (const std::size_t wanted :
-             {std::size_t{1}, std::size_t{100}, raw.size() / 2, raw.size() - 1}) {
-            Bytes out(raw.size(), 0);
-            const auto decoded = lzf_decompress(packed, out, wanted);
-            ASSERT_EQ(decoded.error, nullptr) << wanted;
-            EXPECT_GE(decoded.produced, wanted);
-            EXPECT_LE(decoded.produced, std::min(raw.size(), wanted + 264));
-            EXPECT_TRUE(std::equal(out.begin(), out.begin() + static_cast<long>(decoded.produced),
-                                   raw.begin()))
-                << wanted;
-        }
-    }
-    // Damage after the wanted part: unseen when stopping early, an error for the whole output.
-    const Bytes raw = random_bytes(5000, 11);
-    Bytes packed = compress(raw);
-    packed.push_back(0x20);  // a back reference with its distance byte missing
-    Bytes out(raw.size());
-    EXPECT_EQ(lzf_decompress(packed, out, 4000).error, nullptr);
-    EXPECT_STREQ(lzf_decompress(packed, out).error, "back reference cut off");
-    // Input that ends before the wanted bytes: fewer bytes produced, which the caller reports.
-    const Bytes half(packed.begin(), packed.begin() + static_cast<long>(packed.size() / 2));
-    const auto cut = lzf_decompress(half, out, 4000);
-    EXPECT_LT(cut.produced, 4000u);
-}
-
 TEST(Lzf, PrefixesAndGarbageStayInBounds) {
     // Every prefix of a valid block decodes to a prefix of the input or reports an error.
     const Bytes raw = inputs().back().second;

@@ -263,27 +263,6 @@ TEST(PcdRead, BinaryCompressedSkipsPaddingBlocksLikePcl) {
     EXPECT_EQ(again.labels, cloud.labels);
 }
 
-// Columns after the last one read (here rgb) are not decoded: damage there goes unseen, while
-// the same damage before the end of z is an error.
-TEST(PcdRead, BinaryCompressedStopsAfterTheLastColumnRead) {
-    const std::string header =
-        "FIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 1\n"
-        "POINTS 2\nDATA binary_compressed\n";
-    const std::string xyz =
-        Bytes().put(1.0f).put(4.0f).put(2.0f).put(5.0f).put(3.0f).put(6.0f).str();
-    const std::string cut_reference = "\x20";  // a back reference without its distance byte
-    const esf::PointCloud cloud =
-        pcd_from(header + compressed_body(lzf_literals(xyz) + cut_reference, 32));
-    ASSERT_EQ(cloud.points.size(), 2u);
-    EXPECT_EQ(cloud.points[0], Eigen::Vector3f(1, 2, 3));
-    EXPECT_EQ(cloud.points[1], Eigen::Vector3f(4, 5, 6));
-    EXPECT_THAT(
-        io_error([&] {
-            pcd_from(header + compressed_body(lzf_literals(xyz.substr(0, 20)) + cut_reference, 32));
-        }),
-        HasSubstr("corrupt LZF data in binary_compressed block: back reference cut off"));
-}
-
 TEST(PcdRead, LzfBackReferencesIncludingLongOverlappingOnes) {
     // Four points (1, 2, 3): each 16-byte block is a 4-byte literal and a 12-byte back reference
     // at distance 4 (overlapping; long form: ctrl 7 << 5, extra length 12 - 2 - 7 = 3).
