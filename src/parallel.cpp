@@ -17,6 +17,7 @@ int resolve_threads(int threads) {
     if (threads < 0)
         throw std::invalid_argument("thread count must be >= 0 (0 = all cores), got " +
                                     std::to_string(threads));
+    if (threads >= 1 && threads <= kThreadsWithinAnyLimit) return threads;
     // Tens of thousands of TBB workers exhaust the allocator: never more than max_threads().
     return threads == 0 ? tbb::info::default_concurrency() : std::min(threads, max_threads());
 }

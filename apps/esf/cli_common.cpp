@@ -27,6 +27,7 @@ CLI::Validator thread_limit() {
                 return "not a whole number of threads";
             }
             if (threads < 0) return "must be >= 0 (0 = all cores), got " + value;
+            if (threads <= esf::kThreadsWithinAnyLimit) return {};
             const int limit = esf::max_threads();
             if (threads > limit) {
                 std::fprintf(

@@ -9,6 +9,10 @@ namespace esf {
 
 /// The most threads a `threads` option gets: 4 x the cores (tbb::info::default_concurrency()).
 int max_threads();
+/// max_threads() is never below this: counts up to it are taken as they are without asking TBB
+/// for the core count (which starts TBB's runtime and loads further libraries, a cost that a
+/// single-threaded process need not pay).
+inline constexpr int kThreadsWithinAnyLimit = 4;
 /// Number of threads a `threads` option means: 0 = all cores; above max_threads() it is
 /// clamped to max_threads() without notice (a CLI warns); negative is rejected.
 int resolve_threads(int threads);
