@@ -1,7 +1,5 @@
 #include "esf/render.hpp"
 
-#include <embree3/rtcore.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -11,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "embree_library.hpp"
 #include "esf/parallel.hpp"
 #include "esf/view_sphere.hpp"
 
@@ -26,20 +25,22 @@ constexpr float kInfinity = std::numeric_limits<float>::infinity();
 class EmbreeScene {
   public:
     EmbreeScene()
-        : device_(rtcNewDevice("verbose=0"), &rtcReleaseDevice), scene_(nullptr, &rtcReleaseScene) {
+        : rtc_(detail::embree_library()),
+          device_(rtc_.NewDevice("verbose=0"), rtc_.ReleaseDevice),
+          scene_(nullptr, rtc_.ReleaseScene) {
         if (device_ == nullptr)
             throw std::runtime_error(std::string("embree: cannot create a device: ") +
-                                     error_name(rtcGetDeviceError(nullptr)));
-        rtcSetDeviceErrorFunction(device_.get(), &EmbreeScene::on_error, this);
-        scene_.reset(rtcNewScene(device_.get()));
+                                     error_name(rtc_.GetDeviceError(nullptr)));
+        rtc_.SetDeviceErrorFunction(device_.get(), &EmbreeScene::on_error, this);
+        scene_.reset(rtc_.NewScene(device_.get()));
         throw_if_error("creating the scene");
         // Robust traversal: no cracks between neighbouring triangles, whatever the ray.
-        rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
-        rtcSetSceneBuildQuality(scene_.get(), RTC_BUILD_QUALITY_HIGH);
+        rtc_.SetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);
+        rtc_.SetSceneBuildQuality(scene_.get(), RTC_BUILD_QUALITY_HIGH);
         const bool ray16 =
-            rtcGetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED);
+            rtc_.GetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED);
         const bool ray8 =
-            rtcGetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED);
+            rtc_.GetDeviceProperty(device_.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED);
         packet_ = ray16 ? 16 : ray8 ? 8 : 4;
         throw_if_error("creating the scene");
     }
@@ -49,23 +50,23 @@ class EmbreeScene {
     /// Adds a mesh whose vertices are mapped by `transform` (computed in double) to the scene
     /// frame; returns its geometry id (0, 1, ... in order of addition).
     unsigned add(const Mesh& mesh, const Eigen::Affine3d& transform) {
-        RTCGeometry geometry = rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+        RTCGeometry geometry = rtc_.NewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
         if (geometry == nullptr) throw_if_error("creating a mesh");
         auto* vertices = static_cast<float*>(
-            rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                    3 * sizeof(float), mesh.vertices.size()));
+            rtc_.SetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                      3 * sizeof(float), mesh.vertices.size()));
         auto* indices = static_cast<unsigned*>(
-            rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                    3 * sizeof(unsigned), mesh.triangles.size()));
+            rtc_.SetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                      3 * sizeof(unsigned), mesh.triangles.size()));
         if (vertices == nullptr || indices == nullptr) {
-            rtcReleaseGeometry(geometry);
+            rtc_.ReleaseGeometry(geometry);
             throw_if_error("allocating mesh buffers");
             throw std::runtime_error("embree: cannot allocate mesh buffers");
         }
         for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
             const Eigen::Vector3f p = (transform * mesh.vertices[i].cast<double>()).cast<float>();
             if (!p.allFinite()) {
-                rtcReleaseGeometry(geometry);
+                rtc_.ReleaseGeometry(geometry);
                 throw std::invalid_argument("mesh vertex " + std::to_string(i) +
                                             " is out of float range once placed");
             }
@@ -76,15 +77,15 @@ class EmbreeScene {
                 indices[3 * i + static_cast<std::size_t>(k)] =
                     static_cast<unsigned>(mesh.triangles[i][k]);
         }
-        rtcCommitGeometry(geometry);
-        const unsigned id = rtcAttachGeometry(scene_.get(), geometry);
-        rtcReleaseGeometry(geometry);
+        rtc_.CommitGeometry(geometry);
+        const unsigned id = rtc_.AttachGeometry(scene_.get(), geometry);
+        rtc_.ReleaseGeometry(geometry);
         throw_if_error("adding a mesh");
         return id;
     }
 
     void commit() {
-        rtcCommitScene(scene_.get());
+        rtc_.CommitScene(scene_.get());
         throw_if_error("building the scene");
     }
 
@@ -118,7 +119,7 @@ class EmbreeScene {
                 std::string(error_name(code)) + (message ? std::string(": ") + message : "");
     }
     void throw_if_error(const char* what) {
-        const RTCError code = rtcGetDeviceError(device_.get());
+        const RTCError code = rtc_.GetDeviceError(device_.get());
         if (code == RTC_ERROR_NONE) return;
         std::string message;
         {
@@ -130,8 +131,9 @@ class EmbreeScene {
         throw std::runtime_error(std::string("embree: ") + what + ": " + message);
     }
 
-    std::mutex mutex_;     // guards message_, written by Embree's error callback
-    std::string message_;  // (declared first: outlives the device)
+    std::mutex mutex_;                  // guards message_, written by Embree's error callback
+    std::string message_;               // (declared first: outlives the device)
+    const detail::EmbreeLibrary& rtc_;  // (declared before the device and scene it creates)
     std::unique_ptr<RTCDeviceTy, decltype(&rtcReleaseDevice)> device_;
     std::unique_ptr<RTCSceneTy, decltype(&rtcReleaseScene)> scene_;
     int packet_ = 4;
@@ -182,15 +184,15 @@ RayFrame ray_frame(const Eigen::Isometry3d& scene_to_camera) {
 }
 
 template <int N>
-void intersect(const int* valid, RTCScene scene, RTCIntersectContext* context,
-               RTCRayHitNt<N>& packet) {
+void intersect(const detail::EmbreeLibrary& rtc, const int* valid, RTCScene scene,
+               RTCIntersectContext* context, RTCRayHitNt<N>& packet) {
     if constexpr (N == 16) {
-        rtcIntersect16(valid, scene, context, reinterpret_cast<RTCRayHit16*>(&packet));
+        rtc.Intersect16(valid, scene, context, reinterpret_cast<RTCRayHit16*>(&packet));
     } else if constexpr (N == 8) {
-        rtcIntersect8(valid, scene, context, reinterpret_cast<RTCRayHit8*>(&packet));
+        rtc.Intersect8(valid, scene, context, reinterpret_cast<RTCRayHit8*>(&packet));
     } else {
         static_assert(N == 4);
-        rtcIntersect4(valid, scene, context, reinterpret_cast<RTCRayHit4*>(&packet));
+        rtc.Intersect4(valid, scene, context, reinterpret_cast<RTCRayHit4*>(&packet));
     }
 }
 
@@ -201,8 +203,9 @@ void cast_band(RTCScene scene, const CameraIntrinsics& camera, const RayFrame& f
     static_assert(TW * TH == N);
     const int width = rect.width();
     band.resize(static_cast<std::size_t>(TH * width));
+    const detail::EmbreeLibrary& rtc = detail::embree_library();
     RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
+    rtcInitIntersectContext(&context);  // inline in Embree's header
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     alignas(64) RTCRayHitNt<N> packet;
     alignas(64) int valid[N];
@@ -246,7 +249,7 @@ void cast_band(RTCScene scene, const CameraIntrinsics& camera, const RayFrame& f
             packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
         if (!any) continue;
-        intersect<N>(valid, scene, &context, packet);
+        intersect<N>(rtc, valid, scene, &context, packet);
         for (int k = 0; k < N; ++k) {
             if (valid[k] == 0 || packet.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
             Hit& hit = band[static_cast<std::size_t>((k / TW) * width + u + k % TW - rect.u0)];

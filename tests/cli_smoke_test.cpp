@@ -59,6 +59,37 @@ class CliSmokeTest : public ::testing::Test {
         return path;
     }
 
+    /// A cube of 10 cm as an OBJ mesh.
+    std::string write_cube(const std::string& name) const {
+        const std::string path = (dir_ / name).string();
+        std::ofstream out(path);
+        for (int i = 0; i < 8; ++i)
+            out << "v " << 0.1 * (i & 1) << ' ' << 0.1 * ((i >> 1) & 1) << ' '
+                << 0.1 * ((i >> 2) & 1) << '\n';
+        for (const char* face : {"1 3 4 2", "5 6 8 7", "1 2 6 5", "3 7 8 4", "1 5 7 3", "2 4 8 6"})
+            out << "f " << face << '\n';
+        return path;
+    }
+
+    /// What the dynamic loader logged (LD_DEBUG=files) while `esf ARGS` ran: every shared
+    /// library each process of the run opened.
+    std::string loader_log(const std::string& args) const {
+        const fs::path log = dir_ / "loader";
+        ::setenv("LD_DEBUG", "files", 1);
+        ::setenv("LD_DEBUG_OUTPUT", log.c_str(), 1);  // one file per process: loader.PID
+        const CliRun run = esf(args);
+        ::unsetenv("LD_DEBUG");
+        ::unsetenv("LD_DEBUG_OUTPUT");
+        EXPECT_EQ(run.code, 0) << args << ": " << run.err;
+        std::string text;
+        for (const auto& entry : fs::directory_iterator(dir_)) {
+            if (entry.path().filename().string().rfind("loader.", 0) != 0) continue;
+            text += read_text(entry.path());
+            fs::remove(entry.path());
+        }
+        return text;
+    }
+
     fs::path dir_;
 };
 
@@ -87,6 +118,17 @@ TEST_F(CliSmokeTest, DescribeWritesOneCsvLinePerFile) {
     std::size_t commas = 0;
     for (const char c : run.out) commas += c == ',';
     EXPECT_EQ(commas, static_cast<std::size_t>(esf::kEsfSize));
+}
+
+TEST_F(CliSmokeTest, OnlyRenderingOpensEmbree) {
+    const std::string box = write_box("box.pcd");
+    const std::string describing = loader_log("describe --samples 2000 " + quoted(box));
+    ASSERT_NE(describing.find("libstdc++"), std::string::npos) << "no log of esf's own loading";
+    EXPECT_EQ(describing.find("libembree3"), std::string::npos) << describing;
+    const std::string rendering =
+        loader_log("render --level 0 --width 64 --height 48 -o " + quoted(dir_ / "views") + " " +
+                   quoted(write_cube("cube.obj")));
+    EXPECT_NE(rendering.find("libembree3"), std::string::npos);
 }
 
 TEST_F(CliSmokeTest, DescribeCsvValuesAreTheLibrarysBitForBit) {

@@ -1,6 +1,7 @@
 // Uses the installed esf: describes a generated cloud, writes and reads it back, and checks
 // that the descriptor is a 640-bin histogram summing to 1 and the same after the round trip;
-// writes a mesh and loads it back (through the installed mesh importer helper).
+// writes a mesh and loads it back (through the installed mesh importer helper) and renders it
+// (Embree, opened on the first rendering call: the package does not link it).
 
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include "esf/descriptor.hpp"
 #include "esf/esf_descriptor.hpp"
 #include "esf/mesh.hpp"
+#include "esf/render.hpp"
 
 int main(int argc, char** argv) {
     try {
@@ -47,8 +49,20 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "consumer: the mesh read back differs\n");
             return 1;
         }
-        std::printf("consumer: esf descriptor of %zu points, sum %.6f; %zu descriptors known\n",
-                    back.points.size(), sum, esf::descriptor_names().size());
+        esf::RenderOptions options;
+        options.level = 0;
+        options.threads = 1;
+        std::size_t rendered = 0;
+        for (const esf::RenderedView& view : esf::render_views(loaded, options))
+            rendered += view.points.size();
+        if (rendered == 0) {
+            std::fprintf(stderr, "consumer: no view of the mesh has a point\n");
+            return 1;
+        }
+        std::printf(
+            "consumer: esf descriptor of %zu points, sum %.6f; %zu descriptors known; %zu points "
+            "rendered\n",
+            back.points.size(), sum, esf::descriptor_names().size(), rendered);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "consumer: %s\n", e.what());
         return 2;
