@@ -193,13 +193,43 @@ constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
 constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
 constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
 
-/// Visited counts and records of all lines, 16 at a time.
-ESF_TARGET_AVX512 void visited_records_avx512(std::span<const std::uint32_t> starts,
-                                              std::span<const std::uint32_t> ends,
-                                              std::span<std::uint8_t> visited,
-                                              std::vector<std::uint64_t>& records) {
+/// Lines per chunk of bucket_lines_avx512(): a multiple of the 16 lanes of a group.
+constexpr std::uint32_t kChunkLines = 256;
+
+/// Visited counts of all lines, and their records (start | end << kEndShift | line <<
+/// kLineShift) bucketed by visited count: each count fills
+/// chunks of kChunkLines records taken in turn from one pool, so every group of 16 in a chunk
+/// has lines of one length. Chunks are numbered in the order they are opened; each count's last
+/// chunk may be partly filled (chunk_size). Unlike a counting sort, no tally of the counts is
+/// needed first.
+ESF_TARGET_AVX512 std::size_t bucket_lines_avx512(std::span<const std::uint32_t> starts,
+                                                  std::span<const std::uint32_t> ends,
+                                                  std::span<std::uint8_t> visited,
+                                                  TraceScratch& scratch) {
     const __m512i m63 = _mm512_set1_epi32(63), one = _mm512_set1_epi32(1);
     const std::size_t count = starts.size();
+    // Every chunk is full but each count's last: at most count / kChunkLines + kGridSide + 1.
+    const std::size_t most_chunks = count / kChunkLines + kGridSide + 1;
+    scratch.chunked.resize(most_chunks * kChunkLines);
+    scratch.chunk_visited.resize(most_chunks);
+    scratch.chunk_size.resize(most_chunks);
+    std::uint64_t* const pool = scratch.chunked.data();
+    // Per count: where its next record goes (0: no chunk yet). A count whose next place starts
+    // a chunk has filled its chunk (or has none) and opens the next free one.
+    std::array<std::uint32_t, kGridSide + 1> next{};
+    std::uint32_t chunks = 0;
+    const auto put = [&](std::uint32_t v, std::uint64_t record) {
+        std::uint32_t at = next[v];
+        if (at % kChunkLines == 0) {  // one record in kChunkLines
+            scratch.chunk_visited[chunks] = static_cast<std::uint8_t>(v);
+            at = chunks++ * kChunkLines;
+        }
+        pool[at] = record;
+        next[v] = at + 1;
+    };
+    // First every line's count and record, 16 at a time; then the records into their chunks
+    // (reading the vector stores back at once would stall on store forwarding).
+    std::vector<std::uint64_t>& records = scratch.records;
     records.resize(count);
     const __m512i lane = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
     std::size_t i = 0;
@@ -233,12 +263,19 @@ ESF_TARGET_AVX512 void visited_records_avx512(std::span<const std::uint32_t> sta
         records[i] =
             starts[i] | std::uint64_t{ends[i]} << kEndShift | std::uint64_t{i} << kLineShift;
     }
+    for (i = 0; i < count; ++i) put(visited[i], records[i]);
+    for (std::uint32_t c = 0; c < chunks; ++c) scratch.chunk_size[c] = kChunkLines;
+    for (const std::uint32_t at : next)  // each count's last chunk, full or not
+        if (at != 0) scratch.chunk_size[(at - 1) / kChunkLines] = (at - 1) % kChunkLines + 1;
+    return chunks;
 }
 
 // The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
-// one line per lane. Lines are sorted by length, so a group runs min(n) cells without masks and
-// only its few longer lanes run on with an activity mask. Gathers are never masked (slow on some
-// CPUs): lanes past their end keep their look-up inside the table and their bits are dropped.
+// one line per lane. The AVX-512 kernel's groups hold lines of one length (bucketed, see
+// bucket_lines_avx512), so they run without per-lane masks. The AVX2 kernel's lines are sorted
+// by length: a group runs min(n) cells without masks and only its few longer lanes run on with
+// an activity mask. Gathers are never masked (slow on some CPUs): lanes past their end keep
+// their look-up inside the table and their bits are dropped.
 
 // The AVX-512 kernel looks up three cells per gathered element (gathers move about one element
 // per cycle: their element count sets its speed) and has no loop-carried error terms:
@@ -268,14 +305,6 @@ constexpr std::array<float, 64> half_per_cell_table() {
     return table;
 }
 alignas(64) constexpr std::array<float, 64> kHalfPerCell = half_per_cell_table();
-
-/// The records sorted by visited count.
-void sort_lines(std::span<const std::uint64_t> records, std::span<const std::uint8_t> visited,
-                std::vector<std::uint64_t>& sorted) {
-    std::array<std::uint32_t, kGridSide + 1> bucket = length_offsets(visited);
-    sorted.resize(visited.size());
-    for (std::size_t i = 0; i < visited.size(); ++i) sorted[bucket[visited[i]]++] = records[i];
-}
 
 /// Cells x + dx (dx = 0, 1, 2) of a word `low` for x = 0 .. 63, as bits dx of 64 bytes. Past
 /// x = 63 the cells continue into the next word, `high` (the cube table is linear).
@@ -435,16 +464,13 @@ ESF_TARGET_AVX512 void trace_lines_avx512(const VoxelGrid& grid,
                                           std::span<std::uint32_t> occupied,
                                           std::span<std::uint8_t> visited, TraceScratch& scratch,
                                           bool skip_known, bool with_popcnt) {
-    visited_records_avx512(starts, ends, visited, scratch.records);
-    sort_lines(scratch.records, visited, scratch.sorted);
+    const std::size_t chunks = bucket_lines_avx512(starts, ends, visited, scratch);
     build_cubes(grid, scratch);
     const std::uint32_t* cubes = scratch.cubes.data() + kCubePad;
     if (with_popcnt)
-        popcnt::trace_groups(cubes, scratch.sorted.data(), starts.size(), visited.data(),
-                             occupied.data(), skip_known);
+        popcnt::trace_groups(cubes, scratch, chunks, occupied.data(), skip_known);
     else
-        plain::trace_groups(cubes, scratch.sorted.data(), starts.size(), visited.data(),
-                            occupied.data(), skip_known);
+        plain::trace_groups(cubes, scratch, chunks, occupied.data(), skip_known);
 }
 
 ESF_TARGET_AVX2 void trace_lines_avx2(const VoxelGrid& grid, std::span<const std::uint32_t> starts,

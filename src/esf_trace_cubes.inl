@@ -9,7 +9,6 @@ struct CubeLanes {
     __m512 slope1x3, slope2x3, major_step_x3;
     __m512 rise1, rise2;    // 1 - slope
     __m512 after1, after2;  // 1 - 2 slope
-    __m512 limit;           // cells before it are counted
     __m512i first_bit, base1, major_weight, weight1, weight2, occupied;
 };
 
@@ -89,15 +88,13 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
     lanes.weight1 = minor1_of(roles, weight);
     lanes.weight2 = minor2_of(roles, weight);
     // With known ends, cells 0, 1 and L-1 count without a look-up and the walk covers 2..L-2.
-    lanes.limit = _mm512_cvtepi32_ps(skip_known ? _mm512_sub_epi32(cells, one) : cells);
     lanes.occupied = skip_known ? _mm512_min_epi32(cells, _mm512_set1_epi32(3)) : zero;
     return lanes;
 }
 
-/// How many of the cells i, i+1 and i+2 trace_triple() counts: all three, the first one or two
-/// in every lane (the end of a group whose lines have one length), or per lane (kPerLane: lanes
-/// past their end masked).
-enum CellsCounted { kPerLane = 0, kFirstCell = 1, kFirstTwoCells = 2, kAllCells = 3 };
+/// How many of the cells i, i+1 and i+2 trace_triple() counts in every lane: all three, or the
+/// first one or two (at the end of a group: all its lines have one length).
+enum CellsCounted { kFirstCell = 1, kFirstTwoCells = 2, kAllCells = 3 };
 
 /// Where a walk is at cell i: v(i) of both minor axes and the anchor cell arithmetic of the
 /// major axis (start + i * major_step). Each step of 3 cells adds 3 slope and 3 major_step: the
@@ -121,9 +118,7 @@ ESF_CUBE_TARGET inline void advance_walk(const CubeLanes& lanes, CubeWalk& walk)
 
 /// Cells i, i+1 and i+2 of every lane (the walk at cell i), as many as `counted` says.
 template <CellsCounted counted>
-ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, const CubeWalk& walk,
-                                         int i) {
-    constexpr bool tail = counted == kPerLane;
+ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, const CubeWalk& walk) {
     constexpr int kFloor = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
     const __m512 v1 = walk.v1, v2 = walk.v2;
     const __m512 q1 = _mm512_roundscale_ps(v1, kFloor);
@@ -139,11 +134,7 @@ ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, con
         r2, _mm512_mask_add_ps(lanes.after2, next2, lanes.after2, one_f), _CMP_GE_OQ);
     const __m512 position =
         _mm512_fmadd_ps(q2, lanes.step2, _mm512_fmadd_ps(q1, lanes.step1, walk.major));
-    __m512i anchor = _mm512_cvttps_epi32(position);
-    // Lanes past their end may leave the grid: their (ignored) look-ups stay in the table.
-    if (tail)
-        anchor = _mm512_min_epi32(_mm512_max_epi32(anchor, _mm512_set1_epi32(-kCubePad)),
-                                  _mm512_set1_epi32(kGridCells - 1));
+    const __m512i anchor = _mm512_cvttps_epi32(position);
     const __m512i cube = _mm512_mask_i32gather_epi32(
         _mm512_setzero_si512(), static_cast<__mmask16>(0xffff), anchor, cubes, 4);
     __m512i bit1 = _mm512_mask_add_epi32(lanes.base1, next1, lanes.base1, lanes.weight1);
@@ -152,13 +143,9 @@ ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, con
     bit2 = _mm512_mask_add_epi32(bit2, later1, bit2, lanes.weight1);
     bit2 = _mm512_mask_add_epi32(bit2, later2, bit2, lanes.weight2);
     const __m512i one = _mm512_set1_epi32(1);
-    __mmask16 live[3] = {0xffff, 0xffff, 0xffff};  // cells i, i+1, i+2 before the lane's end
+    __mmask16 live[3] = {0xffff, 0xffff, 0xffff};  // cells i, i+1, i+2 before the lines' end
     if (counted == kFirstCell || counted == kFirstTwoCells) live[2] = 0;
     if (counted == kFirstCell) live[1] = 0;
-    if (tail)
-        for (int k = 0; k < 3; ++k)
-            live[k] = _mm512_cmp_ps_mask(lanes.limit, _mm512_set1_ps(static_cast<float>(i + k)),
-                                         _CMP_GT_OQ);
 #if ESF_CUBE_POPCNT
     // One population count of the three selected bits.
     const __m512i first = _mm512_maskz_mov_epi32(live[0], lanes.first_bit);
@@ -193,32 +180,29 @@ ESF_CUBE_TARGET inline void unpack_lines(const std::uint64_t* record, __mmask16 
     lines = narrow(_mm512_srli_epi64(low, kLineShift), _mm512_srli_epi64(high, kLineShift));
 }
 
-/// Traces the sorted `records` (sort_lines()) through the cube table, 16 lines per group.
-ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const std::uint64_t* records,
-                                  std::size_t count, const std::uint8_t* visited,
-                                  std::uint32_t* occupied, bool skip_known) {
+/// Traces the chunked lines of bucket_lines_avx512() through the cube table, 16 lines per
+/// group: every line of a chunk visits the same number of cells.
+ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const TraceScratch& scratch,
+                                  std::size_t chunks, std::uint32_t* occupied, bool skip_known) {
     const auto* cubes = reinterpret_cast<const int*>(cube_table);
     const int first_cell = skip_known ? 2 : 0, end_skip = skip_known ? 1 : 0;
-    for (std::size_t group = 0; group < count; group += 16) {
-        const std::size_t size = std::min<std::size_t>(16, count - group);
-        const std::uint64_t* record = records + group;
-        __m512i s, t, lines;
-        unpack_lines(record, static_cast<__mmask16>((1u << size) - 1u), s, t, lines);
-        CubeLanes lanes = setup_cubes(s, t, skip_known);
-        const int shortest = visited[record[0] >> kLineShift] - end_skip;
-        const int longest = visited[record[size - 1] >> kLineShift] - end_skip;
-        int i = first_cell;
-        CubeWalk walk = start_walk(lanes, i);
-        for (; i + 2 < shortest; i += 3, advance_walk(lanes, walk))
-            trace_triple<kAllCells>(lanes, cubes, walk, i);
-        if (shortest == longest) {  // most groups: every lane ends at the same cell
-            if (longest - i == 1) trace_triple<kFirstCell>(lanes, cubes, walk, i);
-            if (longest - i == 2) trace_triple<kFirstTwoCells>(lanes, cubes, walk, i);
-        } else {
-            for (; i < longest; i += 3, advance_walk(lanes, walk))
-                trace_triple<kPerLane>(lanes, cubes, walk, i);
+    for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
+        const std::size_t count = scratch.chunk_size[chunk];
+        const std::uint64_t* const records = scratch.chunked.data() + chunk * kChunkLines;
+        const int cells = scratch.chunk_visited[chunk] - end_skip;
+        for (std::size_t group = 0; group < count; group += 16) {
+            const std::size_t size = std::min<std::size_t>(16, count - group);
+            const auto live = static_cast<__mmask16>((1u << size) - 1u);
+            __m512i s, t, lines;
+            unpack_lines(records + group, live, s, t, lines);
+            CubeLanes lanes = setup_cubes(s, t, skip_known);
+            int i = first_cell;
+            CubeWalk walk = start_walk(lanes, i);
+            for (; i + 2 < cells; i += 3, advance_walk(lanes, walk))
+                trace_triple<kAllCells>(lanes, cubes, walk);
+            if (cells - i == 1) trace_triple<kFirstCell>(lanes, cubes, walk);
+            if (cells - i == 2) trace_triple<kFirstTwoCells>(lanes, cubes, walk);
+            _mm512_mask_i32scatter_epi32(occupied, live, lines, lanes.occupied, 4);
         }
-        _mm512_mask_i32scatter_epi32(occupied, static_cast<__mmask16>((1u << size) - 1u), lines,
-                                     lanes.occupied, 4);
     }
 }

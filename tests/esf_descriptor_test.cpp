@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
 
 #include "esf_points.hpp"
 #include "esf_trace.hpp"
@@ -596,6 +598,45 @@ TEST(LineTrace, SimdKernelsMatchScalarOnGroupsOfOneLength) {
     for (auto kernel : kSimdKernels) {
         esf::detail::TraceScratch scratch;
         expect_kernel_matches_scalar(grid, lines, kernel, esf::detail::LineEnds::kAny, scratch, "");
+    }
+}
+
+// Lengths whose lines fill several of the AVX-512 kernel's chunks of 256 lines exactly, by one
+// line more or one less, in shuffled order: every chunk boundary and last, partly filled group.
+TEST(LineTrace, SimdKernelsMatchScalarWhenOneLengthFillsSeveralChunks) {
+    std::mt19937 rng(29);
+    esf::detail::VoxelGrid grid;
+    grid.clear();
+    std::uniform_int_distribution<std::uint32_t> coord(0, 63);
+    for (int i = 0; i < 3000; ++i) grid.set(pack_cell(coord(rng), coord(rng), coord(rng)));
+    grid.dilate(64);
+    RandomLines lines;
+    const std::pair<std::uint32_t, int> lengths[] = {{7, 255},  {9, 256},   {12, 257},
+                                                     {20, 512}, {30, 1001}, {63, 3}};
+    for (const auto& [length, count] : lengths)
+        for (int k = 0; k < count; ++k) {
+            // `length` steps along z, the minor axes random within it.
+            std::uniform_int_distribution<std::uint32_t> z0(0, 63 - length), minor(0, 63);
+            const std::uint32_t z = z0(rng), x = minor(rng), y = minor(rng);
+            std::uniform_int_distribution<std::uint32_t> x1(x >= length ? x - length : 0,
+                                                            std::min(63u, x + length));
+            std::uniform_int_distribution<std::uint32_t> y1(y >= length ? y - length : 0,
+                                                            std::min(63u, y + length));
+            lines.starts.push_back(pack_cell(x, y, z));
+            lines.ends.push_back(pack_cell(x1(rng), y1(rng), z + length));
+        }
+    std::vector<std::size_t> order(lines.starts.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::shuffle(order.begin(), order.end(), rng);
+    RandomLines shuffled;
+    for (const std::size_t i : order) {
+        shuffled.starts.push_back(lines.starts[i]);
+        shuffled.ends.push_back(lines.ends[i]);
+    }
+    for (auto kernel : kSimdKernels) {
+        esf::detail::TraceScratch scratch;
+        expect_kernel_matches_scalar(grid, shuffled, kernel, esf::detail::LineEnds::kAny, scratch,
+                                     "");
     }
 }
 
