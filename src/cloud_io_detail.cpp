@@ -60,20 +60,9 @@ std::string not_regular(mode_t mode) {
     return std::string("is ") + kind + ", not a regular file";
 }
 
-class FdCloser {
-  public:
-    explicit FdCloser(int fd) : fd_(fd) {}
-    ~FdCloser() { ::close(fd_); }
-    FdCloser(const FdCloser&) = delete;
-    FdCloser& operator=(const FdCloser&) = delete;
-
-  private:
-    int fd_;
-};
-
 }  // namespace
 
-FileBytes read_regular_file(const std::string& path) {
+RegularFile::RegularFile(const std::string& path) : path_(path) {
     struct stat st {};
     if (::stat(path.c_str(), &st) != 0) {
         const int error = errno;
@@ -82,24 +71,41 @@ FileBytes read_regular_file(const std::string& path) {
     }
     if (const std::string why = not_regular(st.st_mode); !why.empty()) fail(path, 0, why);
     // Non-blocking, so that a FIFO swapped in after the stat cannot block the open either.
-    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
-    if (fd < 0) fail(path, 0, "cannot open for reading: " + errno_text(errno));
-    const FdCloser closer(fd);
-    if (::fstat(fd, &st) != 0) fail(path, 0, "cannot read: " + errno_text(errno));
-    if (const std::string why = not_regular(st.st_mode); !why.empty()) fail(path, 0, why);
+    fd_ = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd_ < 0) fail(path, 0, "cannot open for reading: " + errno_text(errno));
+    if (::fstat(fd_, &st) != 0) {
+        const int error = errno;
+        ::close(fd_);
+        fail(path, 0, "cannot read: " + errno_text(error));
+    }
+    if (const std::string why = not_regular(st.st_mode); !why.empty()) {
+        ::close(fd_);
+        fail(path, 0, why);
+    }
+    size_ = static_cast<std::size_t>(st.st_size);
+}
 
-    FileBytes bytes;
-    const auto size = static_cast<std::size_t>(st.st_size);
-    bytes.data = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(size, 1));
-    while (bytes.size < size) {
-        const ssize_t got = ::read(fd, bytes.data.get() + bytes.size, size - bytes.size);
+RegularFile::~RegularFile() { ::close(fd_); }
+
+std::size_t RegularFile::read(char* out, std::size_t n) {
+    std::size_t done = 0;
+    while (done < n) {
+        const ssize_t got = ::read(fd_, out + done, n - done);
         if (got < 0) {
             if (errno == EINTR) continue;
-            fail(path, 0, "read error: " + errno_text(errno));
+            fail(path_, 0, "read error: " + errno_text(errno));
         }
         if (got == 0) break;  // the file shrank while being read: keep what is there
-        bytes.size += static_cast<std::size_t>(got);
+        done += static_cast<std::size_t>(got);
     }
+    return done;
+}
+
+FileBytes read_regular_file(const std::string& path) {
+    RegularFile file(path);
+    FileBytes bytes;
+    bytes.data = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(file.size(), 1));
+    bytes.size = file.read(bytes.data.get(), file.size());
     return bytes;
 }
 

@@ -50,9 +50,28 @@ struct FileBytes {
     std::string_view view() const { return {data.get(), size}; }
 };
 
-/// Reads `path`, which must be a regular file: a directory, FIFO, socket or device is refused
-/// (checked with stat before opening and with fstat on the descriptor, opened non-blocking), so
-/// that no reader ever blocks on a pipe or reads an endless device.
+/// A regular file open for reading, and its size when opened: a directory, FIFO, socket or
+/// device is refused (checked with stat before opening and with fstat on the descriptor, opened
+/// non-blocking), so that no reader ever blocks on a pipe or reads an endless device.
+class RegularFile {
+  public:
+    explicit RegularFile(const std::string& path);
+    ~RegularFile();
+    RegularFile(const RegularFile&) = delete;
+    RegularFile& operator=(const RegularFile&) = delete;
+
+    std::size_t size() const { return size_; }
+    /// Reads up to `n` bytes into `out` from where the last read stopped; fewer only where the
+    /// file ends (it may have shrunk since it was opened).
+    std::size_t read(char* out, std::size_t n);
+
+  private:
+    std::string path_;
+    int fd_ = -1;
+    std::size_t size_ = 0;
+};
+
+/// Reads the whole of `path`, which must be a regular file (see RegularFile).
 FileBytes read_regular_file(const std::string& path);
 
 /// Everything left in `in`: one read when the stream can tell its size, chunks otherwise.

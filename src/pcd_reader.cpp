@@ -13,6 +13,7 @@
 
 #include "cloud_io_detail.hpp"
 #include "esf/cloud_io.hpp"
+#include "esf/error.hpp"
 #include "lzf.hpp"
 #include "number_text.hpp"
 #include "pcd_header.hpp"
@@ -238,9 +239,65 @@ PointCloud parse_pcd(std::string_view data, const std::string& name) {
     return cloud;
 }
 
+namespace {
+
+/// The bytes read first: a header that ends within them is parsed before the data is read.
+constexpr std::size_t kHeadBytes = 4096;
+
+/// Whether each point is exactly x, y, z as float32 in this host's byte order, nothing else:
+/// the data is then the points' own memory layout.
+bool packed_xyz_floats(const PcdHeader& h) {
+    static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+    if (!kLittleEndianHost || h.data != PcdData::kBinary || h.label || h.fields.size() != 3)
+        return false;
+    for (const PcdField& f : h.fields)
+        if (f.type != 'F' || f.size != 4 || f.count != 1) return false;
+    return h.x == 0 && h.y == 1 && h.z == 2;
+}
+
+}  // namespace
+
 PointCloud read_pcd(const std::string& path) {
-    const FileBytes bytes = read_regular_file(path);
-    return parse_pcd(bytes.view(), path);
+    RegularFile file(path);
+    const std::size_t size = file.size();
+    std::array<char, kHeadBytes> first_bytes;
+    const std::size_t head = file.read(first_bytes.data(), std::min(size, kHeadBytes));
+    const char* const bytes = first_bytes.data();
+    // Binary x y z floats (segmented views are usually stored so) are read straight into the
+    // points: one copy from the operating system, none through a buffer of the whole file. The
+    // header must end (with its DATA line's newline) within the bytes read first; anything else
+    // goes through parse_pcd, which also reports every error.
+    PcdHeader h;
+    bool direct = false;
+    try {
+        h = parse_pcd_header({bytes, head}, path);
+        direct = h.data_pos <= head && h.data_pos > 0 && bytes[h.data_pos - 1] == '\n' &&
+                 h.points > 0 && packed_xyz_floats(h);
+    } catch (const IoError&) {
+        direct = false;  // an error, or a header longer than the bytes read first
+    }
+    if (direct) {
+        const std::uint64_t need = checked_mul(h.points, 3 * sizeof(float), path);
+        if (need <= size - h.data_pos) {
+            PointCloud cloud;
+            cloud.width = h.width;
+            cloud.height = h.height;
+            cloud.points.resize(h.points);  // Eigen's vectors are not zero-filled
+            char* out = reinterpret_cast<char*>(cloud.points.data());
+            const std::size_t first = std::min<std::size_t>(head - h.data_pos, need);
+            std::copy_n(bytes + h.data_pos, first, out);
+            const std::size_t got = first + file.read(out + first, need - first);
+            if (got < need) {  // the file shrank while being read
+                fail(path, 0,
+                     "truncated: expected " + str(need) + " bytes of binary data, got " + str(got));
+            }
+            return cloud;
+        }
+    }
+    auto whole = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(size, 1));
+    std::copy_n(bytes, head, whole.get());
+    const std::size_t total = head + file.read(whole.get() + head, size - head);
+    return parse_pcd({whole.get(), total}, path);
 }
 
 PointCloud read_pcd(std::istream& in, const std::string& name) {

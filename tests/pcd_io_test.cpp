@@ -357,6 +357,82 @@ TEST(PcdErrors, TruncatedBinary) {
               "mem.pcd: truncated: expected 36 bytes of binary data, got 30");
 }
 
+// Reading from a path: binary x y z floats go straight into the points after the first 4,096
+// bytes are read (a header ending within them); everything else is read whole. Both must give
+// what the bytes parse to, whatever the sizes.
+void write_file(const std::string& path, const std::string& bytes) {
+    std::ofstream(path, std::ios::binary) << bytes;
+}
+
+std::string binary_xyz(const esf::PointCloud& cloud, const std::string& comment) {
+    std::string out = comment + xyz_header(cloud.points.size(), "binary");
+    out.append(reinterpret_cast<const char*>(cloud.points.data()), 12 * cloud.points.size());
+    return out;
+}
+
+TEST(PcdReadFile, BinaryXyzFilesEqualTheirBytesParsed) {
+    TempDir dir;
+    // Points within the first read, across it and far past it; headers short and longer than
+    // the first read (comment lines), and ending exactly at its end.
+    const std::string long_comment = "# " + std::string(5000, 'c') + "\n";
+    const std::string header = xyz_header(10, "binary");
+    const std::string to_the_end = "# " + std::string(4096 - 3 - header.size(), 'e') + "\n";
+    ASSERT_EQ((to_the_end + header).size(), 4096u);
+    for (const std::size_t n : {1, 10, 340, 341, 1000, 50000})
+        for (const std::string& comment : {std::string(), long_comment, to_the_end}) {
+            const esf::PointCloud cloud = sample_cloud(n, false);
+            const std::string bytes = binary_xyz(cloud, comment);
+            const std::string path = dir.file("cloud.pcd");
+            write_file(path, bytes);
+            const esf::PointCloud read = esf::read_pcd(path);
+            const esf::PointCloud parsed = esf::parse_pcd(bytes, path);
+            SCOPED_TRACE(std::to_string(n) + " points, comment of " +
+                         std::to_string(comment.size()) + " bytes");
+            expect_same_points(read.points, parsed.points);
+            expect_same_points(read.points, cloud.points);
+            EXPECT_EQ(read.width, parsed.width);
+            EXPECT_EQ(read.height, parsed.height);
+            EXPECT_TRUE(read.labels.empty());
+        }
+}
+
+TEST(PcdReadFile, ADataLineCutByTheFirstReadIsNotTakenForAnother) {
+    // "DATA binary" ends the first 4,096 bytes, but the line goes on: "_compressed".
+    TempDir dir;
+    const esf::PointCloud cloud = sample_cloud(20, false);
+    std::string raw;
+    for (int axis = 0; axis < 3; ++axis)
+        for (const auto& p : cloud.points) raw += Bytes().put(p[axis]).str();
+    const std::string header = xyz_header(20, "binary_compressed");
+    const std::size_t cut = header.size() - std::string("_compressed\n").size();
+    const std::string comment = "# " + std::string(4096 - cut - 3, 'p') + "\n";
+    const std::string bytes =
+        comment + header +
+        compressed_body(lzf_literals(raw), static_cast<std::uint32_t>(raw.size()));
+    ASSERT_EQ(bytes.substr(4096 - 11, 11), "DATA binary");
+    const std::string path = dir.file("cut.pcd");
+    write_file(path, bytes);
+    expect_same_points(esf::read_pcd(path).points, cloud.points);
+}
+
+TEST(PcdReadFile, TruncatedAndEmptyFilesGiveTheMessagesOfTheirBytes) {
+    TempDir dir;
+    const std::string path = dir.file("short.pcd");
+    for (const std::size_t n : {3, 2000}) {
+        const std::string whole = binary_xyz(sample_cloud(n, false), "");
+        const std::string cut = whole.substr(0, whole.size() - 6);
+        write_file(path, cut);
+        EXPECT_EQ(io_error([&] { esf::read_pcd(path); }),
+                  io_error([&] { esf::parse_pcd(cut, path); }));
+        EXPECT_THAT(io_error([&] { esf::read_pcd(path); }), HasSubstr("truncated"));
+    }
+    write_file(path, "");
+    EXPECT_EQ(io_error([&] { esf::read_pcd(path); }), path + ": empty file");
+    write_file(path, "FIELDS x y z\nPOINTS 2\nDATA bin");
+    EXPECT_EQ(io_error([&] { esf::read_pcd(path); }),
+              io_error([&] { esf::parse_pcd("FIELDS x y z\nPOINTS 2\nDATA bin", path); }));
+}
+
 TEST(PcdErrors, AbsurdPointCountIsCheckedBeforeAllocating) {
     const std::string binary =
         "FIELDS x y z\nWIDTH 1000000\nHEIGHT 1000000\nPOINTS 1000000000000\nDATA binary\n" +
