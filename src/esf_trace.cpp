@@ -197,11 +197,10 @@ constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
 constexpr std::uint32_t kChunkLines = 256;
 
 /// Visited counts of all lines, and their records (start | end << kEndShift | line <<
-/// kLineShift) bucketed by visited count: each count fills
-/// chunks of kChunkLines records taken in turn from one pool, so every group of 16 in a chunk
-/// has lines of one length. Chunks are numbered in the order they are opened; each count's last
-/// chunk may be partly filled (chunk_size). Unlike a counting sort, no tally of the counts is
-/// needed first.
+/// kLineShift) bucketed by visited count: each count fills chunks of kChunkLines records taken
+/// in turn from one pool, so every group of 16 in a chunk has lines of one length. Chunks are
+/// numbered in the order they are opened; each count's last chunk may be partly filled
+/// (chunk_size). Unlike a counting sort, no tally of the counts is needed first.
 ESF_TARGET_AVX512 std::size_t bucket_lines_avx512(std::span<const std::uint32_t> starts,
                                                   std::span<const std::uint32_t> ends,
                                                   std::span<std::uint8_t> visited,
