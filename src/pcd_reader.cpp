@@ -24,6 +24,13 @@ namespace {
 
 using namespace detail;
 
+/// The error for binary data shorter than its header says.
+[[noreturn]] void fail_truncated(const std::string& name, std::uint64_t need,
+                                 std::uint64_t available) {
+    fail(name, 0,
+         "truncated: expected " + str(need) + " bytes of binary data, got " + str(available));
+}
+
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 /// One point per line, one token per value (padding '_' included); only the tokens of x, y, z
@@ -145,10 +152,7 @@ void read_pcd_binary(std::string_view data, const PcdHeader& h, const std::strin
     std::fill(stride.begin(), stride.end(), point_step);
     const std::uint64_t need = checked_mul(h.points, point_step, name);
     const std::uint64_t available = data.size() - h.data_pos;
-    if (available < need) {
-        fail(name, 0,
-             "truncated: expected " + str(need) + " bytes of binary data, got " + str(available));
-    }
+    if (available < need) fail_truncated(name, need, available);
     read_pcd_fields(data.data() + h.data_pos, h, start, stride, name, cloud);
 }
 
@@ -156,16 +160,10 @@ void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::s
                          PointCloud& cloud) {
     const std::uint64_t available = data.size() - h.data_pos;
     const char* base = data.data() + h.data_pos;
-    if (available < 8) {
-        fail(name, 0, "truncated: expected 8 bytes of binary data, got " + str(available));
-    }
+    if (available < 8) fail_truncated(name, 8, available);
     const std::uint64_t compressed = load<std::uint32_t>(base, !kLittleEndianHost);
     const std::uint64_t uncompressed = load<std::uint32_t>(base + 4, !kLittleEndianHost);
-    if (available - 8 < compressed) {
-        fail(name, 0,
-             "truncated: expected " + str(compressed + 8) + " bytes of binary data, got " +
-                 str(available));
-    }
+    if (available - 8 < compressed) fail_truncated(name, compressed + 8, available);
     // PCL stores one block per field, all points' values contiguous, without the padding
     // fields '_'; a block layout that keeps the padding is accepted too.
     std::uint64_t bytes_without_padding = 0, bytes_with_padding = 0;
@@ -287,10 +285,7 @@ PointCloud read_pcd(const std::string& path) {
             const std::size_t first = std::min<std::size_t>(head - h.data_pos, need);
             std::copy_n(bytes + h.data_pos, first, out);
             const std::size_t got = first + file.read(out + first, need - first);
-            if (got < need) {  // the file shrank while being read
-                fail(path, 0,
-                     "truncated: expected " + str(need) + " bytes of binary data, got " + str(got));
-            }
+            if (got < need) fail_truncated(path, need, got);  // the file shrank meanwhile
             return cloud;
         }
     }

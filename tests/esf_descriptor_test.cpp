@@ -568,6 +568,24 @@ TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
     }
 }
 
+/// A line of `length` steps along `axis` (0, 1, 2) from a random cell, up the axis; its minor
+/// axes move at most `length` cells either way, at random.
+std::pair<std::uint32_t, std::uint32_t> line_along(int axis, std::uint32_t length,
+                                                   std::mt19937& rng) {
+    std::uniform_int_distribution<std::uint32_t> major(0, 63 - length), minor(0, 63);
+    std::uint32_t from[3], to[3];
+    from[axis] = major(rng);
+    to[axis] = from[axis] + length;
+    const int m1 = axis == 0 ? 1 : 0, m2 = axis == 2 ? 1 : 2;  // the minor axes, in order
+    for (const int m : {m1, m2}) from[m] = minor(rng);
+    for (const int m : {m1, m2}) {
+        std::uniform_int_distribution<std::uint32_t> end(from[m] >= length ? from[m] - length : 0,
+                                                         std::min(63u, from[m] + length));
+        to[m] = end(rng);
+    }
+    return {pack_cell(from[0], from[1], from[2]), pack_cell(to[0], to[1], to[2])};
+}
+
 // Lines of one length in whole groups of 16 (and a few more), for every length: groups whose
 // lanes all end at the same cell finish without per-lane masks in the AVX-512 kernel.
 TEST(LineTrace, SimdKernelsMatchScalarOnGroupsOfOneLength) {
@@ -584,14 +602,7 @@ TEST(LineTrace, SimdKernelsMatchScalarOnGroupsOfOneLength) {
     RandomLines lines;
     for (std::uint32_t length = 0; length < 64; ++length)
         for (int k = 0; k < 32 + static_cast<int>(length % 5); ++k) {
-            // A line of `length` steps along x from a random cell, its minor axes random.
-            std::uniform_int_distribution<std::uint32_t> x0(0, 63 - length), minor(0, 63);
-            const std::uint32_t x = x0(rng), y = minor(rng), z = minor(rng);
-            std::uniform_int_distribution<std::uint32_t> y1(y >= length ? y - length : 0,
-                                                            std::min(63u, y + length));
-            std::uniform_int_distribution<std::uint32_t> z1(z >= length ? z - length : 0,
-                                                            std::min(63u, z + length));
-            const std::uint32_t a = pack_cell(x, y, z), b = pack_cell(x + length, y1(rng), z1(rng));
+            const auto [a, b] = line_along(0, length, rng);
             lines.starts.push_back(k % 2 ? a : b);
             lines.ends.push_back(k % 2 ? b : a);
         }
@@ -615,15 +626,9 @@ TEST(LineTrace, SimdKernelsMatchScalarWhenOneLengthFillsSeveralChunks) {
                                                      {20, 512}, {30, 1001}, {63, 3}};
     for (const auto& [length, count] : lengths)
         for (int k = 0; k < count; ++k) {
-            // `length` steps along z, the minor axes random within it.
-            std::uniform_int_distribution<std::uint32_t> z0(0, 63 - length), minor(0, 63);
-            const std::uint32_t z = z0(rng), x = minor(rng), y = minor(rng);
-            std::uniform_int_distribution<std::uint32_t> x1(x >= length ? x - length : 0,
-                                                            std::min(63u, x + length));
-            std::uniform_int_distribution<std::uint32_t> y1(y >= length ? y - length : 0,
-                                                            std::min(63u, y + length));
-            lines.starts.push_back(pack_cell(x, y, z));
-            lines.ends.push_back(pack_cell(x1(rng), y1(rng), z + length));
+            const auto [a, b] = line_along(2, length, rng);
+            lines.starts.push_back(a);
+            lines.ends.push_back(b);
         }
     std::vector<std::size_t> order(lines.starts.size());
     std::iota(order.begin(), order.end(), std::size_t{0});
