@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "lzf_tokens.hpp"
+
 namespace esf::detail {
 
 namespace {
@@ -203,6 +205,14 @@ std::size_t lzf_compress(std::span<const unsigned char> in, std::span<unsigned c
 }
 
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out) {
+    return lzf_decompress(in, out, out.size());
+}
+
+LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out,
+                          std::size_t size) {
+    if (size < out.size()) {
+        throw std::invalid_argument("lzf_decompress: output larger than the stated size");
+    }
     const unsigned char* ip = in.data();
     const unsigned char* const in_end = ip + in.size();
     unsigned char* op = out.data();
@@ -254,49 +264,59 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
     }
 
     // Careful loop for the last tokens (and small blocks): every length checked, exact copies.
-    while (ip < in_end) {
+    // Past the end of `out` the tokens are only checked (lzf_check_tokens), counted up to `size`.
+    while (ip < in_end && op < out_end) {
+        const std::size_t produced = static_cast<std::size_t>(op - out.data());
         const std::size_t ctrl = *ip++;
-        if (ctrl < 32) {  // literal run of ctrl + 1 bytes
-            const std::size_t len = ctrl + 1;
+        std::size_t len = 0;
+        std::size_t distance = 0;  // 0: a literal run
+        if (ctrl < 32) {           // literal run of ctrl + 1 bytes
+            len = ctrl + 1;
             if (static_cast<std::size_t>(in_end - ip) < len)
                 return corrupt("literal run past the end");
-            if (static_cast<std::size_t>(out_end - op) < len) {
-                return corrupt("output exceeds stated size");
-            }
-            std::memcpy(op, ip, len);
-            op += len;
-            ip += len;
-            continue;
-        }
-        std::size_t len = ctrl >> 5;  // back reference of len + 2 bytes
-        if (ip >= in_end) return corrupt("back reference cut off");
-        if (len == 7) {
-            len += *ip++;
+            if (size - produced < len) return corrupt("output exceeds stated size");
+        } else {
+            len = ctrl >> 5;  // back reference of len + 2 bytes
             if (ip >= in_end) return corrupt("back reference cut off");
+            if (len == 7) {
+                len += *ip++;
+                if (ip >= in_end) return corrupt("back reference cut off");
+            }
+            distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
+            len += 2;
+            if (distance > produced) {
+                return corrupt("back reference before the start of the output");
+            }
+            if (size - produced < len) return corrupt("output exceeds stated size");
         }
-        const std::size_t distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
-        len += 2;
-        if (distance > static_cast<std::size_t>(op - out.data())) {
-            return corrupt("back reference before the start of the output");
-        }
-        if (static_cast<std::size_t>(out_end - op) < len) {
-            return corrupt("output exceeds stated size");
-        }
-        const unsigned char* ref = op - distance;
-        if (distance >= len) {
-            std::memcpy(op, ref, len);
+        // The part of the token that `out` holds (the first bytes of a back reference are a back
+        // reference of fewer bytes).
+        const std::size_t kept = std::min(len, static_cast<std::size_t>(out_end - op));
+        if (distance == 0) {
+            std::memcpy(op, ip, kept);
+            ip += len;
+        } else if (distance >= kept) {
+            std::memcpy(op, op - distance, kept);
         } else {
             // Overlapping: the output repeats the last `distance` bytes. Copy one period, then
             // double what is done (from the start of the match, so every copy is disjoint and
             // starts at a whole period): log2(len / distance) copies instead of len.
-            std::memcpy(op, ref, distance);
-            for (std::size_t done = distance; done < len;) {
-                const std::size_t chunk = std::min(done, len - done);
+            std::memcpy(op, op - distance, distance);
+            for (std::size_t done = distance; done < kept;) {
+                const std::size_t chunk = std::min(done, kept - done);
                 std::memcpy(op + done, op, chunk);
                 done += chunk;
             }
         }
+        if (kept < len) {
+            return lzf_check_tokens(in, static_cast<std::size_t>(ip - in.data()), produced + len,
+                                    size);
+        }
         op += len;
+    }
+    if (ip < in_end) {
+        return lzf_check_tokens(in, static_cast<std::size_t>(ip - in.data()),
+                                static_cast<std::size_t>(op - out.data()), size);
     }
     result.produced = static_cast<std::size_t>(op - out.data());
     return result;

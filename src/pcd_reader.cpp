@@ -190,11 +190,22 @@ void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::s
              "corrupt binary_compressed data: " + str(compressed) +
                  " compressed bytes cannot hold " + str(uncompressed) + " bytes");
     }
+    // One block per field; the blocks after the last one read (the colours, usually) are only
+    // checked, not written: the check covers every token as decoding would.
+    std::vector<std::uint64_t> start(h.fields.size()), stride(h.fields.size());
+    std::uint64_t offset = 0, read_end = 0;
+    for (std::size_t f = 0; f < h.fields.size(); ++f) {
+        stride[f] = h.fields[f].bytes();
+        start[f] = offset;
+        if (keep_padding || !h.fields[f].padding()) offset += h.points * stride[f];
+        if (f == h.x || f == h.y || f == h.z || (h.label && f == *h.label)) read_end = offset;
+    }
     const auto size = static_cast<std::size_t>(uncompressed);
-    auto buffer = std::make_unique_for_overwrite<unsigned char[]>(std::max<std::size_t>(size, 1));
+    const auto wanted = static_cast<std::size_t>(read_end);
+    auto buffer = std::make_unique_for_overwrite<unsigned char[]>(std::max<std::size_t>(wanted, 1));
     const LzfDecoded decoded = lzf_decompress(
         {reinterpret_cast<const unsigned char*>(base + 8), static_cast<std::size_t>(compressed)},
-        {buffer.get(), size});
+        {buffer.get(), wanted}, size);
     if (decoded.error) {
         fail(name, 0,
              std::string("corrupt LZF data in binary_compressed block: ") + decoded.error +
@@ -204,13 +215,6 @@ void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::s
         fail(name, 0,
              "corrupt binary_compressed data: decompressed to " + str(decoded.produced) +
                  " bytes, expected " + str(uncompressed));
-    }
-    std::vector<std::uint64_t> start(h.fields.size()), stride(h.fields.size());
-    std::uint64_t offset = 0;
-    for (std::size_t f = 0; f < h.fields.size(); ++f) {
-        stride[f] = h.fields[f].bytes();
-        start[f] = offset;
-        if (keep_padding || !h.fields[f].padding()) offset += h.points * stride[f];
     }
     read_pcd_fields(reinterpret_cast<const char*>(buffer.get()), h, start, stride, name, cloud);
 }

@@ -400,6 +400,117 @@ TEST(Lzf, RandomTokensDecodeAndDamagedOnesStayInBounds) {
     }
 }
 
+/// Random tokens of every kind, `tokens` of them: literal runs, back references near and far,
+/// short and long.
+Stream random_stream(std::size_t tokens, std::mt19937& gen) {
+    Stream s;
+    for (std::size_t k = 0; k < tokens; ++k) {
+        if (s.raw.empty() || gen() % 3 == 0) {
+            Bytes bytes(1 + gen() % 32);
+            for (auto& b : bytes) b = static_cast<unsigned char>(gen());
+            s.literal(bytes);
+            continue;
+        }
+        const std::size_t reach = std::min<std::size_t>(s.raw.size(), 8192);
+        const std::size_t distance =
+            1 + gen() % (gen() % 2 ? std::min<std::size_t>(reach, 20) : reach);
+        s.reference(distance, 3 + gen() % (gen() % 2 ? 14 : 262));
+    }
+    return s;
+}
+
+/// Decodes the first `wanted` bytes of a block of `size` bytes, the output exactly `wanted`
+/// bytes long (sanitizer builds catch a write past it).
+std::pair<esf::detail::LzfDecoded, Bytes> decode_first(const Bytes& packed, std::size_t wanted,
+                                                       std::size_t size) {
+    const Bytes in(packed);
+    Bytes out(wanted);
+    const auto decoded = lzf_decompress(in, out, size);
+    return {decoded, out};
+}
+
+void expect_same_result(const esf::detail::LzfDecoded& a, const esf::detail::LzfDecoded& b) {
+    EXPECT_STREQ(a.error, b.error);
+    EXPECT_EQ(a.at, b.at);
+    EXPECT_EQ(a.produced, b.produced);
+}
+
+TEST(Lzf, DecodingTheFirstBytesChecksTheRestAsDecodingAllWould) {
+    // Blocks long enough that the tokens after the bytes wanted are walked in pieces (more than
+    // 64 KiB of them after 8 KiB of output), and short ones: the first bytes are the block's,
+    // and the result is the whole block's.
+    std::mt19937 gen(21);
+    for (int trial = 0; trial < 60; ++trial) {
+        const Stream s =
+            random_stream(trial % 3 == 0 ? 1 + gen() % 300 : 20000 + gen() % 20000, gen);
+        const std::size_t size = s.raw.size();
+        for (const std::size_t wanted :
+             {std::size_t{0}, std::size_t{1}, std::size_t{9000}, size / 3, size - 1, size}) {
+            if (wanted > size) continue;
+            SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(wanted) + " of " +
+                         std::to_string(size) + " bytes");
+            const auto [decoded, out] = decode_first(s.packed, wanted, size);
+            EXPECT_EQ(decoded.error, nullptr);
+            EXPECT_EQ(decoded.produced, size);
+            EXPECT_TRUE(is_prefix(out, s.raw));
+            // A stated size smaller or larger than the block's: the same error as decoding all.
+            for (const std::size_t stated : {size + 1, size - size / 4}) {
+                if (stated < wanted) continue;
+                const auto [all, all_out] = decode_first(s.packed, stated, stated);
+                expect_same_result(decode_first(s.packed, wanted, stated).first, all);
+            }
+        }
+    }
+}
+
+TEST(Lzf, DamageAfterTheBytesWantedIsReportedAsDecodingAllWould) {
+    // A few bytes changed anywhere in a long block: decoding only its first bytes gives the same
+    // error at the same byte, or the same clean result, as decoding it all. No change is missed
+    // because its bytes are not written.
+    std::mt19937 gen(22);
+    int errors = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        const Stream s = random_stream(25000, gen);
+        const std::size_t size = s.raw.size();
+        Bytes damaged = s.packed;
+        const std::size_t changes = 1 + gen() % 3;
+        for (std::size_t k = 0; k < changes; ++k) {
+            damaged[damaged.size() / 4 + gen() % (damaged.size() * 3 / 4)] =
+                static_cast<unsigned char>(gen());
+        }
+        const auto [all, all_out] = decode_first(damaged, size, size);
+        const std::size_t wanted = gen() % (size / 4);
+        SCOPED_TRACE("trial " + std::to_string(trial));
+        expect_same_result(decode_first(damaged, wanted, size).first, all);
+        errors += all.error != nullptr || all.produced != size;
+    }
+    EXPECT_GT(errors, 40);  // damage to a control byte shows: the comparison is not vacuous
+}
+
+TEST(Lzf, TokensThatNoPieceWalkMeetsAreWalkedOneByOne) {
+    // Literal runs of 32 bytes that are all 0x1f (the control byte of a run of 32): a walk
+    // started at any byte that is not a token's first moves 33 bytes at a time and never meets
+    // the true walk, which must then walk every piece itself.
+    Stream s;
+    s.literal(random_bytes(10000, 23));
+    s.literal(Bytes(33 * 32 * 100, 0x1f));
+    const auto [decoded, out] = decode_first(s.packed, 9000, s.raw.size());
+    EXPECT_EQ(decoded.error, nullptr);
+    EXPECT_EQ(decoded.produced, s.raw.size());
+    EXPECT_TRUE(is_prefix(out, s.raw));
+    // One byte short at the end: the last run is cut off, as decoding all reports.
+    Bytes cut = s.packed;
+    cut.pop_back();
+    expect_same_result(decode_first(cut, 9000, s.raw.size()).first,
+                       decode_first(cut, s.raw.size(), s.raw.size()).first);
+    EXPECT_STREQ(decode_first(cut, 9000, s.raw.size()).first.error, "literal run past the end");
+}
+
+TEST(Lzf, AnOutputLargerThanTheStatedSizeIsRefused) {
+    Bytes out(10);
+    EXPECT_THROW(lzf_decompress(Bytes{0x00, 'a'}, out, 9), std::invalid_argument);
+}
+
 #ifdef ESF_TEST_WITH_PCL
 TEST(LzfAgainstPcl, PclDecodesWhatWeEncode) {
     for (const auto& [name, raw] : inputs()) {

@@ -12,7 +12,20 @@
 #include "commands.hpp"
 #include "esf/error.hpp"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 int main(int argc, char** argv) {
+#if defined(__GLIBC__)
+    // A batch reads file after file, each needing blocks of several MB (a 640 x 480 scene:
+    // the decoded columns, the points, the finite points). glibc would map some of them afresh
+    // for every file, or give the top of its heap back to the system and fault it in again (up
+    // to 2,400 page faults a scene). Blocks up to 64 MiB come from the heap and up to 256 MiB
+    // of freed memory stay in it for the next file; larger blocks are still mapped and unmapped.
+    mallopt(M_MMAP_THRESHOLD, 64 << 20);
+    mallopt(M_TRIM_THRESHOLD, 256 << 20);
+#endif
     CLI::App app{
         "esf - 3-D object classification with the Ensemble of Shape Functions descriptor\n"
         "(Wohlkinger & Vincze, 2011). Train on CAD models, recognise objects in depth data."};
