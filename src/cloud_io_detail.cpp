@@ -4,11 +4,16 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <immintrin.h>
+
+#include <array>
 #include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <istream>
 
 #include "esf/error.hpp"
+#include "esf_simd.hpp"
 
 namespace esf::detail {
 
@@ -221,6 +226,54 @@ void read_axis(const char* src, std::size_t stride, Scalar type, Points& points,
 
 }  // namespace
 
+namespace {
+
+/// Where each float of three 16-float output vectors (16 points x, y, z) comes from: from x or
+/// y (index into x then y, as vpermt2ps takes two sources) or, where the mask bit is set, z.
+struct InterleaveXyz {
+    std::array<std::array<std::int32_t, 16>, 3> from_xy{}, from_z{};
+    std::array<std::uint16_t, 3> z_mask{};
+};
+
+constexpr InterleaveXyz kInterleaveXyz = [] {
+    InterleaveXyz t{};
+    for (int v = 0; v < 3; ++v) {
+        for (int k = 0; k < 16; ++k) {
+            const int g = 16 * v + k, point = g / 3, axis = g % 3;
+            t.from_xy[v][k] = axis == 1 ? 16 + point : point;
+            t.from_z[v][k] = point;
+            if (axis == 2) t.z_mask[v] = static_cast<std::uint16_t>(t.z_mask[v] | (1u << k));
+        }
+    }
+    return t;
+}();
+
+/// x, y, z columns of n floats into n points, 16 at a time (two permutes per 16 floats written);
+/// returns the points written, a multiple of 16.
+ESF_TARGET_AVX512 std::size_t interleave_xyz_avx512(const char* x, const char* y, const char* z,
+                                                   std::size_t n, float* out) {
+    __m512i from_xy[3], from_z[3];
+    for (std::size_t v = 0; v < 3; ++v) {
+        from_xy[v] = _mm512_loadu_si512(kInterleaveXyz.from_xy[v].data());
+        from_z[v] = _mm512_loadu_si512(kInterleaveXyz.from_z[v].data());
+    }
+    const std::size_t blocks = n / 16;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        const __m512 vx = _mm512_loadu_ps(x + 64 * b);
+        const __m512 vy = _mm512_loadu_ps(y + 64 * b);
+        const __m512 vz = _mm512_loadu_ps(z + 64 * b);
+        for (std::size_t v = 0; v < 3; ++v) {
+            const __m512 xy = _mm512_permutex2var_ps(vx, from_xy[v], vy);
+            _mm512_storeu_ps(out + 48 * b + 16 * v,
+                             _mm512_mask_permutexvar_ps(xy, kInterleaveXyz.z_mask[v], from_z[v],
+                                                        vz));
+        }
+    }
+    return 16 * blocks;
+}
+
+}  // namespace
+
 void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
     const std::size_t n = points.size();
     if (n == 0) return;
@@ -244,7 +297,11 @@ void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
                                c.stride[2] == 4;
     if (float_columns) {  // binary_compressed PCD: x, y and z as three columns, one pass
         float* out = points.data()->data();
-        for (std::size_t i = 0; i < n; ++i)
+        const std::size_t done =
+            esf_avx512_available()
+                ? interleave_xyz_avx512(c.src[0], c.src[1], c.src[2], n, out)
+                : 0;
+        for (std::size_t i = done; i < n; ++i)
             for (std::size_t a = 0; a < 3; ++a) std::memcpy(out + 3 * i + a, c.src[a] + 4 * i, 4);
         return;
     }
@@ -262,6 +319,12 @@ std::size_t read_label_column(const char* src, std::size_t stride, Scalar type, 
                               std::vector<std::uint32_t>& labels) {
     return visit_scalar(type, [&](auto tag) -> std::size_t {
         using T = decltype(tag);
+        if constexpr (std::is_same_v<T, std::uint32_t>) {  // every value is a label
+            if (!swap && stride == sizeof(T) && !labels.empty()) {
+                std::memcpy(labels.data(), src, labels.size() * sizeof(T));
+                return labels.size();
+            }
+        }
         for (std::size_t i = 0; i < labels.size(); ++i) {
             if (!to_label(load<T>(src + i * stride, swap), labels[i])) return i;
         }
