@@ -1,10 +1,9 @@
 #include "cloud_io_detail.hpp"
 
 #include <fcntl.h>
+#include <immintrin.h>
 #include <sys/stat.h>
 #include <unistd.h>
-
-#include <immintrin.h>
 
 #include <array>
 #include <cerrno>
@@ -251,7 +250,7 @@ constexpr InterleaveXyz kInterleaveXyz = [] {
 /// x, y, z columns of n floats into n points, 16 at a time (two permutes per 16 floats written);
 /// returns the points written, a multiple of 16.
 ESF_TARGET_AVX512 std::size_t interleave_xyz_avx512(const char* x, const char* y, const char* z,
-                                                   std::size_t n, float* out) {
+                                                    std::size_t n, float* out) {
     __m512i from_xy[3], from_z[3];
     for (std::size_t v = 0; v < 3; ++v) {
         from_xy[v] = _mm512_loadu_si512(kInterleaveXyz.from_xy[v].data());
@@ -264,9 +263,9 @@ ESF_TARGET_AVX512 std::size_t interleave_xyz_avx512(const char* x, const char* y
         const __m512 vz = _mm512_loadu_ps(z + 64 * b);
         for (std::size_t v = 0; v < 3; ++v) {
             const __m512 xy = _mm512_permutex2var_ps(vx, from_xy[v], vy);
-            _mm512_storeu_ps(out + 48 * b + 16 * v,
-                             _mm512_mask_permutexvar_ps(xy, kInterleaveXyz.z_mask[v], from_z[v],
-                                                        vz));
+            _mm512_storeu_ps(
+                out + 48 * b + 16 * v,
+                _mm512_mask_permutexvar_ps(xy, kInterleaveXyz.z_mask[v], from_z[v], vz));
         }
     }
     return 16 * blocks;
@@ -297,10 +296,9 @@ void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
                                c.stride[2] == 4;
     if (float_columns) {  // binary_compressed PCD: x, y and z as three columns, one pass
         float* out = points.data()->data();
-        const std::size_t done =
-            esf_avx512_available()
-                ? interleave_xyz_avx512(c.src[0], c.src[1], c.src[2], n, out)
-                : 0;
+        const std::size_t done = esf_avx512_available()
+                                     ? interleave_xyz_avx512(c.src[0], c.src[1], c.src[2], n, out)
+                                     : 0;
         for (std::size_t i = done; i < n; ++i)
             for (std::size_t a = 0; a < 3; ++a) std::memcpy(out + 3 * i + a, c.src[a] + 4 * i, 4);
         return;
