@@ -236,9 +236,10 @@ struct InterleaveXyz {
 
 constexpr InterleaveXyz kInterleaveXyz = [] {
     InterleaveXyz t{};
-    for (int v = 0; v < 3; ++v) {
-        for (int k = 0; k < 16; ++k) {
-            const int g = 16 * v + k, point = g / 3, axis = g % 3;
+    for (std::size_t v = 0; v < 3; ++v) {
+        for (std::size_t k = 0; k < 16; ++k) {
+            const auto g = static_cast<std::int32_t>(16 * v + k);
+            const std::int32_t point = g / 3, axis = g % 3;
             t.from_xy[v][k] = axis == 1 ? 16 + point : point;
             t.from_z[v][k] = point;
             if (axis == 2) t.z_mask[v] = static_cast<std::uint16_t>(t.z_mask[v] | (1u << k));

@@ -23,9 +23,9 @@ namespace {
 
 constexpr std::size_t kMaxDistance = 8192;  // farthest back reference
 constexpr std::size_t kMaxToken = 33;       // most input bytes of one token: a run of 32 literals
-constexpr int kPieces = 6;
-constexpr int kRecorded = 64;
-constexpr int kUnroll = 8;
+constexpr std::size_t kPieces = 6;
+constexpr std::size_t kRecorded = 64;
+constexpr std::size_t kUnroll = 8;
 /// Shortest piece: a walk's recorded tokens and one unrolled round fit in it with room to spare.
 constexpr std::size_t kMinPiece = 16384;
 static_assert(kMinPiece > (kRecorded + kUnroll) * kMaxToken);
@@ -72,19 +72,19 @@ struct Walk {
 Walk walk_pieces(Walk start, const unsigned char* stop) {
     const auto length = static_cast<std::size_t>(stop - start.ip);
     std::array<const unsigned char*, kPieces + 1> bound{};
-    for (int k = 0; k < kPieces; ++k) bound[k] = start.ip + length * k / kPieces;
+    for (std::size_t k = 0; k < kPieces; ++k) bound[k] = start.ip + length * k / kPieces;
     bound[kPieces] = stop;
     std::array<Walk, kPieces> walk{};
     walk[0] = start;
-    for (int k = 1; k < kPieces; ++k) walk[k] = {bound[k], 0};
+    for (std::size_t k = 1; k < kPieces; ++k) walk[k] = {bound[k], 0};
 
     std::array<std::array<Walk, kRecorded>, kPieces> seen{};  // seen[0] stays unused
-    for (int m = 0; m < kRecorded; ++m) {
-        for (int k = 1; k < kPieces; ++k) seen[k][m] = walk[k];
-        for (int k = 0; k < kPieces; ++k) walk[k].step();
+    for (std::size_t m = 0; m < kRecorded; ++m) {
+        for (std::size_t k = 1; k < kPieces; ++k) seen[k][m] = walk[k];
+        for (std::size_t k = 0; k < kPieces; ++k) walk[k].step();
     }
     const auto room = [&] {
-        for (int k = 0; k < kPieces; ++k) {
+        for (std::size_t k = 0; k < kPieces; ++k) {
             if (bound[k + 1] - walk[k].ip < static_cast<std::ptrdiff_t>(kUnroll * kMaxToken)) {
                 return false;
             }
@@ -92,17 +92,17 @@ Walk walk_pieces(Walk start, const unsigned char* stop) {
         return true;
     };
     while (room()) {
-        for (int u = 0; u < kUnroll; ++u) {
-            for (int k = 0; k < kPieces; ++k) walk[k].step();
+        for (std::size_t u = 0; u < kUnroll; ++u) {
+            for (std::size_t k = 0; k < kPieces; ++k) walk[k].step();
         }
     }
-    for (int k = 0; k < kPieces; ++k) {
+    for (std::size_t k = 0; k < kPieces; ++k) {
         while (walk[k].ip < bound[k + 1]) walk[k].step();
     }
 
     Walk truth = walk[0];
-    for (int k = 1; k < kPieces; ++k) {
-        int m = 0;
+    for (std::size_t k = 1; k < kPieces; ++k) {
+        std::size_t m = 0;
         while (m < kRecorded && truth.ip != seen[k][m].ip) {
             if (truth.ip < seen[k][m].ip) {
                 truth.step();
