@@ -267,28 +267,9 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
     // Past the end of `out` the tokens are only checked (lzf_check_tokens), counted up to `size`.
     while (ip < in_end && op < out_end) {
         const std::size_t produced = static_cast<std::size_t>(op - out.data());
-        const std::size_t ctrl = *ip++;
-        std::size_t len = 0;
-        std::size_t distance = 0;  // 0: a literal run
-        if (ctrl < 32) {           // literal run of ctrl + 1 bytes
-            len = ctrl + 1;
-            if (static_cast<std::size_t>(in_end - ip) < len)
-                return corrupt("literal run past the end");
-            if (size - produced < len) return corrupt("output exceeds stated size");
-        } else {
-            len = ctrl >> 5;  // back reference of len + 2 bytes
-            if (ip >= in_end) return corrupt("back reference cut off");
-            if (len == 7) {
-                len += *ip++;
-                if (ip >= in_end) return corrupt("back reference cut off");
-            }
-            distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
-            len += 2;
-            if (distance > produced) {
-                return corrupt("back reference before the start of the output");
-            }
-            if (size - produced < len) return corrupt("output exceeds stated size");
-        }
+        const LzfToken token = read_lzf_token(ip, in_end, produced, size);
+        if (token.error) return corrupt(token.error);
+        const std::size_t len = token.len, distance = token.distance;
         // The part of the token that `out` holds (the first bytes of a back reference are a back
         // reference of fewer bytes).
         const std::size_t kept = std::min(len, static_cast<std::size_t>(out_end - op));

@@ -127,40 +127,21 @@ Walk walk_pieces(Walk start, const unsigned char* stop) {
     return truth;
 }
 
-/// The decoder's careful loop without the copies: the same checks in the same order.
+/// The decoder's careful loop without the copies: the same token reader.
 LzfDecoded check_serial(std::span<const unsigned char> in, const unsigned char* ip,
                         std::size_t produced, std::size_t size) {
     const unsigned char* const in_end = in.data() + in.size();
     LzfDecoded result;
-    const auto corrupt = [&](const char* why) {
-        result.error = why;
-        result.at = static_cast<std::size_t>(ip - in.data());
-        result.produced = produced;
-        return result;
-    };
     while (ip < in_end) {
-        const std::size_t ctrl = *ip++;
-        if (ctrl < 32) {  // literal run of ctrl + 1 bytes
-            const std::size_t len = ctrl + 1;
-            if (static_cast<std::size_t>(in_end - ip) < len) {
-                return corrupt("literal run past the end");
-            }
-            if (size - produced < len) return corrupt("output exceeds stated size");
-            ip += len;
-            produced += len;
-            continue;
+        const LzfToken t = read_lzf_token(ip, in_end, produced, size);
+        if (t.error) {
+            result.error = t.error;
+            result.at = static_cast<std::size_t>(ip - in.data());
+            result.produced = produced;
+            return result;
         }
-        std::size_t len = ctrl >> 5;  // back reference of len + 2 bytes
-        if (ip >= in_end) return corrupt("back reference cut off");
-        if (len == 7) {
-            len += *ip++;
-            if (ip >= in_end) return corrupt("back reference cut off");
-        }
-        const std::size_t distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
-        len += 2;
-        if (distance > produced) return corrupt("back reference before the start of the output");
-        if (size - produced < len) return corrupt("output exceeds stated size");
-        produced += len;
+        if (t.distance == 0) ip += t.len;
+        produced += t.len;
     }
     result.produced = produced;
     return result;
