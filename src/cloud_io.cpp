@@ -35,4 +35,19 @@ PointCloud read_cloud(const std::string& path) {
     return read_xyz(path);
 }
 
+std::size_t read_finite_points(const std::string& path, Points& finite) {
+    PointCloud cloud;
+    switch (cloud_format_from_path(path)) {
+        case CloudFormat::kPcd:
+            return detail::read_pcd_finite(path, finite);
+        case CloudFormat::kPly:
+            cloud = read_ply_cloud(path);
+            break;
+        case CloudFormat::kXyz:
+            cloud = read_xyz(path);
+            break;
+    }
+    return drop_non_finite(cloud.points, finite);
+}
+
 }  // namespace esf

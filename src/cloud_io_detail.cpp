@@ -12,6 +12,7 @@
 #include <istream>
 
 #include "esf/error.hpp"
+#include "esf_points.hpp"
 #include "esf_simd.hpp"
 
 namespace esf::detail {
@@ -272,7 +273,66 @@ ESF_TARGET_AVX512 std::size_t interleave_xyz_avx512(const char* x, const char* y
     return 16 * blocks;
 }
 
+/// The same, keeping only the points whose x, y and z are all finite: each column compressed to
+/// the kept points before the permutes. Writes up to 48 floats past what is kept; returns the
+/// points kept.
+ESF_TARGET_AVX512 std::size_t interleave_finite_xyz_avx512(const char* x, const char* y,
+                                                           const char* z, std::size_t n,
+                                                           float* out) {
+    constexpr int kNonFinite = 0x01 | 0x08 | 0x10 | 0x80;  // quiet NaN, +inf, -inf, signalling NaN
+    __m512i from_xy[3], from_z[3];
+    for (std::size_t v = 0; v < 3; ++v) {
+        from_xy[v] = _mm512_loadu_si512(kInterleaveXyz.from_xy[v].data());
+        from_z[v] = _mm512_loadu_si512(kInterleaveXyz.from_z[v].data());
+    }
+    const std::size_t blocks = n / 16;
+    std::size_t kept = 0;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        __m512 vx = _mm512_loadu_ps(x + 64 * b);
+        __m512 vy = _mm512_loadu_ps(y + 64 * b);
+        __m512 vz = _mm512_loadu_ps(z + 64 * b);
+        const auto keep = static_cast<__mmask16>(~(_mm512_fpclass_ps_mask(vx, kNonFinite) |
+                                                   _mm512_fpclass_ps_mask(vy, kNonFinite) |
+                                                   _mm512_fpclass_ps_mask(vz, kNonFinite)));
+        vx = _mm512_maskz_compress_ps(keep, vx);
+        vy = _mm512_maskz_compress_ps(keep, vy);
+        vz = _mm512_maskz_compress_ps(keep, vz);
+        for (std::size_t v = 0; v < 3; ++v) {
+            const __m512 xy = _mm512_permutex2var_ps(vx, from_xy[v], vy);
+            _mm512_storeu_ps(
+                out + 3 * kept + 16 * v,
+                _mm512_mask_permutexvar_ps(xy, kInterleaveXyz.z_mask[v], from_z[v], vz));
+        }
+        kept += static_cast<std::size_t>(std::popcount(static_cast<unsigned>(keep)));
+    }
+    return kept;
+}
+
 }  // namespace
+
+std::size_t read_finite_xyz_columns(const XyzColumns& c, bool swap, std::size_t n, Points& finite) {
+    const bool float_columns = !swap && c.type[0] == Scalar::kF32 && c.type[1] == Scalar::kF32 &&
+                               c.type[2] == Scalar::kF32 && c.stride[0] == 4 && c.stride[1] == 4 &&
+                               c.stride[2] == 4;
+    if (!float_columns || !esf_avx512_available()) {
+        finite.resize(n);
+        read_xyz_columns(c, swap, finite);
+        return keep_finite_in_place(finite, simd_level(EsfKernels::kBest));
+    }
+    // binary_compressed PCD: x, y and z as three float columns, interleaved and filtered in one
+    // pass (+ 16 points of room for the full-width stores).
+    finite.resize(n + 16);
+    float* out = finite.data()->data();
+    std::size_t kept = interleave_finite_xyz_avx512(c.src[0], c.src[1], c.src[2], n, out);
+    for (std::size_t i = n / 16 * 16; i < n; ++i) {
+        float p[3];
+        for (std::size_t a = 0; a < 3; ++a) std::memcpy(&p[a], c.src[a] + 4 * i, 4);
+        if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))
+            finite[kept++] = {p[0], p[1], p[2]};
+    }
+    finite.resize(kept);
+    return n - kept;
+}
 
 void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
     const std::size_t n = points.size();

@@ -213,6 +213,15 @@ struct XyzColumns {
 /// its type chosen once, never per point. `points` must already have its size.
 void read_xyz_columns(const XyzColumns& columns, bool swap, Points& points);
 
+/// The finite points among the first `n` of the columns (none of x, y, z NaN or infinite), in
+/// order, into `finite` (replaced; its memory is reused); returns how many were dropped. Float
+/// columns of one value each (binary_compressed PCD) take one pass, as in read_xyz_columns.
+std::size_t read_finite_xyz_columns(const XyzColumns& columns, bool swap, std::size_t n,
+                                    Points& finite);
+
+/// read_finite_points() for a PCD file (pcd_reader.cpp).
+std::size_t read_pcd_finite(const std::string& path, Points& finite);
+
 /// labels[i] = the value of type `type` at src + i * stride; returns the index of the first
 /// value that is not an integer in [0, 2^32), or labels.size() when all are.
 std::size_t read_label_column(const char* src, std::size_t stride, Scalar type, bool swap,

@@ -384,7 +384,8 @@ void set_cells(const std::uint32_t* cells, std::size_t count, VoxelGrid& grid) {
 }
 
 /// The finite points of the first `blocks` x 16 points, in order, to `out` (which has 16 floats of
-/// slack after what is kept); returns how many. Per block of 16 points (48 floats): the floats
+/// slack after what is kept, or is `p` itself: a block's stores stay within the block, read
+/// before them); returns how many. Per block of 16 points (48 floats): the floats
 /// that are NaN or infinite, one bit each, folded to one bit per point (bits 3j), spread back
 /// to the point's three floats, and the kept floats compressed.
 ESF_TARGET_AVX512 std::size_t keep_finite_avx512(const float* p, std::size_t blocks, float* out) {
@@ -531,6 +532,17 @@ std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLeve
     for (std::size_t i = blocks * kLanes; i < n; ++i)
         if (points[i].allFinite()) finite[kept++] = points[i];
     finite.resize(kept);
+    return n - kept;
+}
+
+std::size_t keep_finite_in_place(std::vector<Eigen::Vector3f>& points, SimdLevel simd) {
+    const std::size_t n = points.size();
+    const std::size_t blocks = simd == SimdLevel::kAvx512 ? n / kLanes : 0;
+    float* p = points.data()->data();
+    std::size_t kept = blocks > 0 ? keep_finite_avx512(p, blocks, p) : 0;
+    for (std::size_t i = blocks * kLanes; i < n; ++i)
+        if (points[i].allFinite()) points[kept++] = points[i];
+    points.resize(kept);
     return n - kept;
 }
 

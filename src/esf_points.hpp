@@ -46,6 +46,9 @@ NormaliseOutcome normalise_points(std::span<const Eigen::Vector3f> points, int h
 std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLevel simd,
                                std::vector<Eigen::Vector3f>& finite);
 
+/// The same in place: `points` keeps its finite points, in order; returns how many were dropped.
+std::size_t keep_finite_in_place(std::vector<Eigen::Vector3f>& points, SimdLevel simd);
+
 /// Whether points with this covariance lie on one line: the second largest eigenvalue is at
 /// most 1e-10 of the largest.
 bool on_one_line(const Eigen::Matrix3d& covariance);

@@ -14,6 +14,7 @@
 #include "cloud_io_detail.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/error.hpp"
+#include "esf_points.hpp"
 #include "lzf.hpp"
 #include "number_text.hpp"
 #include "pcd_header.hpp"
@@ -113,13 +114,19 @@ void read_pcd_ascii(std::string_view data, const PcdHeader& h, const std::string
     }
 }
 
+/// Where a reader puts the points: all of them into the cloud (`finite` null), or only the finite
+/// ones, in order, into *finite, counting the others in `dropped`.
+struct PointsOut {
+    Points* finite = nullptr;
+    std::size_t dropped = 0;
+};
+
 /// Reads x, y, z (and label) from fields laid out one after another: AoS (binary, stride =
 /// point size) or SoA (decompressed binary_compressed, one block per field).
 void read_pcd_fields(const char* base, const PcdHeader& h, const std::vector<std::uint64_t>& start,
                      const std::vector<std::uint64_t>& stride, const std::string& name,
-                     PointCloud& cloud) {
+                     PointCloud& cloud, PointsOut& out) {
     const bool swap = !kLittleEndianHost;
-    cloud.points.resize(h.points);
     XyzColumns columns;
     const std::array<std::size_t, 3> xyz = {h.x, h.y, h.z};
     for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -128,8 +135,15 @@ void read_pcd_fields(const char* base, const PcdHeader& h, const std::vector<std
         columns.stride[axis] = static_cast<std::size_t>(stride[f]);
         columns.type[axis] = h.fields[f].scalar();
     }
-    read_xyz_columns(columns, swap, cloud.points);
-    if (h.label) {
+    if (out.finite) {
+        out.dropped = read_finite_xyz_columns(columns, swap, h.points, *out.finite);
+    } else {
+        cloud.points.resize(h.points);
+        read_xyz_columns(columns, swap, cloud.points);
+    }
+    // Labels are checked even when not kept; uint32 labels (PCL's) need no check.
+    const bool labels_unchecked = h.label && h.fields[*h.label].scalar() == Scalar::kU32;
+    if (h.label && !(out.finite && labels_unchecked)) {
         cloud.labels.resize(h.points);
         const std::size_t f = *h.label;
         const std::size_t bad =
@@ -141,7 +155,7 @@ void read_pcd_fields(const char* base, const PcdHeader& h, const std::vector<std
 }
 
 void read_pcd_binary(std::string_view data, const PcdHeader& h, const std::string& name,
-                     PointCloud& cloud) {
+                     PointCloud& cloud, PointsOut& out) {
     std::vector<std::uint64_t> start(h.fields.size()), stride(h.fields.size());
     std::uint64_t point_step = 0;
     for (std::size_t f = 0; f < h.fields.size(); ++f) {
@@ -153,11 +167,11 @@ void read_pcd_binary(std::string_view data, const PcdHeader& h, const std::strin
     const std::uint64_t need = checked_mul(h.points, point_step, name);
     const std::uint64_t available = data.size() - h.data_pos;
     if (available < need) fail_truncated(name, need, available);
-    read_pcd_fields(data.data() + h.data_pos, h, start, stride, name, cloud);
+    read_pcd_fields(data.data() + h.data_pos, h, start, stride, name, cloud, out);
 }
 
 void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::string& name,
-                         PointCloud& cloud) {
+                         PointCloud& cloud, PointsOut& out) {
     const std::uint64_t available = data.size() - h.data_pos;
     const char* base = data.data() + h.data_pos;
     if (available < 8) fail_truncated(name, 8, available);
@@ -216,12 +230,11 @@ void read_pcd_compressed(std::string_view data, const PcdHeader& h, const std::s
              "corrupt binary_compressed data: decompressed to " + str(decoded.produced) +
                  " bytes, expected " + str(uncompressed));
     }
-    read_pcd_fields(reinterpret_cast<const char*>(buffer.get()), h, start, stride, name, cloud);
+    read_pcd_fields(reinterpret_cast<const char*>(buffer.get()), h, start, stride, name, cloud,
+                    out);
 }
 
-}  // namespace
-
-PointCloud parse_pcd(std::string_view data, const std::string& name) {
+PointCloud parse_pcd_into(std::string_view data, const std::string& name, PointsOut& out) {
     if (data.empty()) fail(name, 0, "empty file");
     const PcdHeader h = parse_pcd_header(data, name);
     PointCloud cloud;
@@ -230,15 +243,27 @@ PointCloud parse_pcd(std::string_view data, const std::string& name) {
     switch (h.data) {
         case PcdData::kAscii:
             read_pcd_ascii(data, h, name, cloud);
+            if (out.finite) {
+                *out.finite = std::move(cloud.points);
+                out.dropped = keep_finite_in_place(*out.finite, simd_level(EsfKernels::kBest));
+                cloud.points = {};
+            }
             break;
         case PcdData::kBinary:
-            read_pcd_binary(data, h, name, cloud);
+            read_pcd_binary(data, h, name, cloud, out);
             break;
         case PcdData::kBinaryCompressed:
-            read_pcd_compressed(data, h, name, cloud);
+            read_pcd_compressed(data, h, name, cloud, out);
             break;
     }
     return cloud;
+}
+
+}  // namespace
+
+PointCloud parse_pcd(std::string_view data, const std::string& name) {
+    PointsOut all;
+    return parse_pcd_into(data, name, all);
 }
 
 namespace {
@@ -257,9 +282,8 @@ bool packed_xyz_floats(const PcdHeader& h) {
     return h.x == 0 && h.y == 1 && h.z == 2;
 }
 
-}  // namespace
-
-PointCloud read_pcd(const std::string& path) {
+/// read_pcd(path), the points going to `out` (see PointsOut).
+PointCloud read_pcd_into(const std::string& path, PointsOut& out) {
     RegularFile file(path);
     const std::size_t size = file.size();
     std::array<char, kHeadBytes> first_bytes;
@@ -284,20 +308,40 @@ PointCloud read_pcd(const std::string& path) {
             PointCloud cloud;
             cloud.width = h.width;
             cloud.height = h.height;
-            cloud.points.resize(h.points);  // Eigen's vectors are not zero-filled
-            char* out = reinterpret_cast<char*>(cloud.points.data());
+            Points& points = out.finite ? *out.finite : cloud.points;
+            points.resize(h.points);  // Eigen's vectors are not zero-filled
+            char* into = reinterpret_cast<char*>(points.data());
             const std::size_t first = std::min<std::size_t>(head - h.data_pos, need);
-            std::copy_n(bytes + h.data_pos, first, out);
-            const std::size_t got = first + file.read(out + first, need - first);
+            std::copy_n(bytes + h.data_pos, first, into);
+            const std::size_t got = first + file.read(into + first, need - first);
             if (got < need) fail_truncated(path, need, got);  // the file shrank meanwhile
+            if (out.finite)
+                out.dropped = keep_finite_in_place(points, simd_level(EsfKernels::kBest));
             return cloud;
         }
     }
     auto whole = std::make_unique_for_overwrite<char[]>(std::max<std::size_t>(size, 1));
     std::copy_n(bytes, head, whole.get());
     const std::size_t total = head + file.read(whole.get() + head, size - head);
-    return parse_pcd({whole.get(), total}, path);
+    return parse_pcd_into({whole.get(), total}, path, out);
 }
+
+}  // namespace
+
+PointCloud read_pcd(const std::string& path) {
+    PointsOut all;
+    return read_pcd_into(path, all);
+}
+
+namespace detail {
+
+std::size_t read_pcd_finite(const std::string& path, Points& finite) {
+    PointsOut out{&finite};
+    read_pcd_into(path, out);
+    return out.dropped;
+}
+
+}  // namespace detail
 
 PointCloud read_pcd(std::istream& in, const std::string& name) {
     return parse_pcd(read_all(in, name), name);

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -152,6 +153,43 @@ TEST_F(CliSmokeTest, DescribeCsvValuesAreTheLibrarysBitForBit) {
     for (std::size_t i = 0; i < values.size(); ++i) {
         ASSERT_EQ(values[i], expected.descriptor[i]) << "bin " << i;
     }
+}
+
+TEST_F(CliSmokeTest, DescribeJsonCountsTheDroppedPointsOfAnOrganisedScan) {
+    // An organised scan with missing depths (NaN rows and scattered gaps), compressed as PCL
+    // stores scenes: the points, dropped points and descriptor of the library on the whole cloud.
+    esf::PointCloud scan = esf::read_cloud(write_box("box.pcd"));
+    for (std::size_t i = 0; i < scan.points.size(); ++i)
+        if (i % 7 == 3 || (i / 100) % 5 == 2)
+            scan.points[i][static_cast<int>(i % 3)] = std::numeric_limits<float>::quiet_NaN();
+    scan.width = 100;
+    scan.height = static_cast<std::uint32_t>(scan.points.size() / 100);
+    const std::string path = (dir_ / "scan.pcd").string();
+    esf::write_pcd(path, scan, esf::PcdEncoding::kBinaryCompressed);
+    const CliRun run = esf("describe --samples 2000 --threads 1 --format json " + quoted(path));
+    ASSERT_EQ(run.code, 0) << run.err;
+    const nlohmann::json out = nlohmann::json::parse(run.out);
+    esf::EsfOptions options;
+    options.samples = 2000;
+    const esf::EsfResult expected = esf::compute_esf(scan.points, options);
+    ASSERT_GT(expected.dropped_points, 0u);
+    ASSERT_EQ(out.size(), 1u);
+    EXPECT_EQ(out[0]["points"].get<std::size_t>(), expected.points);
+    EXPECT_EQ(out[0]["dropped_points"].get<std::size_t>(), expected.dropped_points);
+    EXPECT_EQ(out[0]["descriptor"].get<std::vector<float>>(),
+              std::vector<float>(expected.descriptor.begin(), expected.descriptor.end()));
+
+    // Too few finite points: the estimator's message, dropped points included.
+    scan.points.resize(300);
+    scan.width = 300;
+    scan.height = 1;
+    for (std::size_t i = 1; i < scan.points.size(); ++i) scan.points[i].x() = -INFINITY;
+    esf::write_pcd(path, scan, esf::PcdEncoding::kBinaryCompressed);
+    const CliRun few = esf("describe " + quoted(path));
+    EXPECT_EQ(few.code, 2);
+    EXPECT_EQ(few.err,
+              "esf: error: " + path +
+                  ": ESF needs at least 3 finite points, got 1 (299 non-finite dropped)\n");
 }
 
 TEST_F(CliSmokeTest, DescribeGoesOnPastAMissingFile) {

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "cloud_io_test_util.hpp"
+#include "test_data.hpp"
 
 namespace {
 
@@ -199,6 +200,160 @@ TEST(CloudFiles, WriteXyzReplacesAtomicallyAndReadsBack) {
     const std::string nowhere = dir.file("no/such/dir/cloud.xyz");
     EXPECT_THAT(io_error([&] { esf::write_xyz(nowhere, cloud); }),
                 StartsWith(nowhere + ": cannot create temporary file"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// read_finite_points: the finite points of read_cloud(), by its own paths
+
+/// A cloud whose non-finite coordinates (NaN, +-inf, in x, y or z alone, in runs that fill whole
+/// blocks of 16 and scattered) are placed at random; its finite points, by definition.
+esf::PointCloud cloud_with_gaps(std::size_t n, std::mt19937& gen, esf::Points& finite) {
+    esf::PointCloud cloud = sample_cloud(n, true);
+    const float bad[4] = {kNaN, std::numeric_limits<float>::infinity(),
+                          -std::numeric_limits<float>::infinity(),
+                          std::numeric_limits<float>::signaling_NaN()};
+    std::uniform_int_distribution<int> roll(0, 9), which(0, 3), axis(0, 2);
+    finite.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+        if ((i / 48) % 3 == 1 || roll(gen) < 3) cloud.points[i][axis(gen)] = bad[which(gen)];
+        const Eigen::Vector3f& p = cloud.points[i];
+        if (std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()))
+            finite.push_back(p);
+    }
+    return cloud;
+}
+
+/// A binary little-endian PLY of the points, with an extra property between y and z.
+std::string ply_binary(const esf::Points& points) {
+    Bytes b;
+    b.text("ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(points.size()) +
+           "\nproperty float x\nproperty float y\nproperty uchar red\nproperty float z\n"
+           "end_header\n");
+    for (const auto& p : points) b.put(p.x()).put(p.y()).put(std::uint8_t{7}).put(p.z());
+    return b.str();
+}
+
+TEST(ReadFinitePoints, TheFinitePointsOfEveryFormatInOrder) {
+    TempDir dir;
+    std::mt19937 gen(5);
+    // Reused from call to call, starting larger than any cloud here: replaced, never appended to.
+    esf::Points finite(5000, Eigen::Vector3f::Constant(9.0f));
+    for (const std::size_t n : {1u, 15u, 16u, 17u, 100u, 1000u, 4099u}) {
+        esf::Points expected;
+        const esf::PointCloud cloud = cloud_with_gaps(n, gen, expected);
+        esf::PointCloud unlabelled = cloud;
+        unlabelled.labels.clear();
+        std::vector<std::string> files;
+        const auto write = [&](const std::string& name, const std::string& bytes) {
+            write_text(dir.file(name), bytes);
+            files.push_back(dir.file(name));
+        };
+        for (const auto encoding : {esf::PcdEncoding::kAscii, esf::PcdEncoding::kBinary,
+                                    esf::PcdEncoding::kBinaryCompressed}) {
+            const std::string e = std::to_string(static_cast<int>(encoding));
+            write("labelled" + e + ".pcd", pcd_bytes(cloud, encoding));
+            write("plain" + e + ".pcd", pcd_bytes(unlabelled, encoding));  // binary: read direct
+        }
+        write("binary.ply", ply_binary(cloud.points));
+        esf::write_xyz(dir.file("text.xyz"), cloud);
+        files.push_back(dir.file("text.xyz"));
+        for (const std::string& file : files) {
+            SCOPED_TRACE(file + ", " + std::to_string(n) + " points");
+            EXPECT_EQ(esf::read_finite_points(file, finite), n - expected.size());
+            expect_same_points(finite, expected);
+            expect_same_points(esf::drop_non_finite(esf::read_cloud(file).points).points, expected);
+        }
+    }
+}
+
+TEST(ReadFinitePoints, NoFinitePointsAndNoPoints) {
+    TempDir dir;
+    esf::PointCloud cloud;
+    cloud.points.assign(37, Eigen::Vector3f(kNaN, 0.0f, 1.0f));
+    cloud.width = 37;
+    esf::Points finite(3, Eigen::Vector3f::Ones());
+    for (const auto encoding : {esf::PcdEncoding::kBinary, esf::PcdEncoding::kBinaryCompressed}) {
+        write_text(dir.file("gone.pcd"), pcd_bytes(cloud, encoding));
+        EXPECT_EQ(esf::read_finite_points(dir.file("gone.pcd"), finite), 37u);
+        EXPECT_TRUE(finite.empty());
+    }
+    write_text(dir.file("none.pcd"), xyz_header(0, "binary_compressed") + compressed_body("", 0));
+    finite.assign(3, Eigen::Vector3f::Ones());
+    EXPECT_EQ(esf::read_finite_points(dir.file("none.pcd"), finite), 0u);
+    EXPECT_TRUE(finite.empty());
+}
+
+// Not keeping the labels does not skip their check: the same error as read_cloud.
+TEST(ReadFinitePoints, TheSameErrorsAsReadCloud) {
+    TempDir dir;
+    std::mt19937 gen(9);
+    esf::Points expected;
+    const esf::PointCloud cloud = cloud_with_gaps(300, gen, expected);
+    const std::string compressed = pcd_bytes(cloud, esf::PcdEncoding::kBinaryCompressed);
+    std::vector<std::string> files;
+    const auto write = [&](const std::string& name, const std::string& bytes) {
+        write_text(dir.file(name), bytes);
+        files.push_back(dir.file(name));
+    };
+    write("cut.pcd", compressed.substr(0, compressed.size() - 9));
+    std::string damaged = compressed;
+    const std::string data_line = "DATA binary_compressed\n";
+    // The first token a back reference: before the start of the output.
+    damaged[damaged.find(data_line) + data_line.size() + 8] = static_cast<char>(0x20);
+    write("damaged.pcd", damaged);
+    // Float labels, one of them not an integer, in a binary_compressed and a binary file.
+    std::string raw;
+    for (int axis = 0; axis < 4; ++axis)
+        for (int i = 0; i < 20; ++i) {
+            const float v = axis < 3 ? static_cast<float>(i + axis) : (i == 13 ? 1.5f : 2.0f);
+            raw.append(reinterpret_cast<const char*>(&v), 4);
+        }
+    const std::string float_labels =
+        "FIELDS x y z label\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 20\nPOINTS 20\n";
+    write("labels.pcd", float_labels + "DATA binary_compressed\n" +
+                            compressed_body(lzf_literals(raw), static_cast<std::uint32_t>(80 * 4)));
+    std::string aos;
+    for (int i = 0; i < 20; ++i)
+        for (int axis = 0; axis < 4; ++axis)
+            aos.append(raw, static_cast<std::size_t>(axis * 80 + i * 4), 4);
+    write("labels_binary.pcd", float_labels + "DATA binary\n" + aos);
+    write("bad.ply",
+          "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+          "property float z\nend_header\n1 2 3\n");
+    write("bad.xyz", "1 2 3\n4 five 6\n");
+    esf::Points finite;
+    for (const std::string& file : files) {
+        const std::string message = io_error([&] { esf::read_cloud(file); });
+        EXPECT_FALSE(message.empty()) << file;
+        EXPECT_EQ(io_error([&] { esf::read_finite_points(file, finite); }), message);
+    }
+    EXPECT_THAT(io_error([&] { esf::read_cloud(dir.file("labels.pcd")); }),
+                HasSubstr("point 13: label is not an integer"));
+}
+
+// Every shared real cloud (organised scenes with gaps, segmented views): the same finite points.
+TEST(ReadFinitePoints, EverySharedRealCloud) {
+    ESF_REQUIRE_DATA("real");
+    std::vector<fs::path> files;
+    for (const auto& e : fs::recursive_directory_iterator(esf::test::data_file("real")))
+        if (e.is_regular_file() && e.path().extension() == ".pcd") files.push_back(e.path());
+    ASSERT_FALSE(files.empty());
+    std::sort(files.begin(), files.end());
+    esf::Points finite;
+    std::size_t with_gaps = 0;
+    for (const auto& file : files) {
+        SCOPED_TRACE(file.string());
+        const esf::Points all = esf::read_cloud(file.string()).points;
+        esf::Points expected;
+        for (const auto& p : all)
+            if (std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()))
+                expected.push_back(p);
+        const std::size_t dropped = esf::read_finite_points(file.string(), finite);
+        EXPECT_EQ(dropped, all.size() - expected.size());
+        expect_same_points(finite, expected);
+        with_gaps += dropped > 0;
+    }
+    EXPECT_GT(with_gaps, 0u);  // the scenes' missing depths
 }
 
 }  // namespace

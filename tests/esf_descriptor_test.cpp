@@ -719,7 +719,8 @@ TEST(EsfTriangles, RatiosWithoutDivisionEqualTheQuotient) {
 }
 
 // The finite points of a cloud with NaN and infinite coordinates (in x, y or z alone, alone or in
-// runs, in blocks with none and blocks with all), by every code path, against the definition.
+// runs, in blocks with none and blocks with all), by every code path, into another vector and in
+// place, against the definition.
 TEST(FinitePoints, EveryPathKeepsTheFinitePointsInOrder) {
     std::mt19937 rng(31);
     std::uniform_real_distribution<float> coordinate(-5.0f, 5.0f);
@@ -746,6 +747,9 @@ TEST(FinitePoints, EveryPathKeepsTheFinitePointsInOrder) {
             const std::size_t dropped = esf::detail::keep_finite_points(points, simd, finite);
             EXPECT_EQ(dropped, n - expected.size()) << n;
             EXPECT_EQ(finite, expected) << n;
+            esf::Points in_place = points;  // each block written over itself
+            EXPECT_EQ(esf::detail::keep_finite_in_place(in_place, simd), n - expected.size()) << n;
+            EXPECT_EQ(in_place, expected) << n;
         }
         EXPECT_EQ(esf::drop_non_finite(points).points, expected) << n;
     }

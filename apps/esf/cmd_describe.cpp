@@ -49,7 +49,6 @@ void run_describe(const DescribeArgs& args) {
 
     // Read and describe every file in parallel; each file's outcome goes to its own slot.
     struct Item {
-        std::size_t points = 0;
         EsfResult result;
         std::string error;
     };
@@ -57,13 +56,21 @@ void run_describe(const DescribeArgs& args) {
     const int slots = resolve_threads(args.threads);
     std::vector<EsfEstimator> estimators;
     for (int i = 0; i < slots; ++i) estimators.emplace_back(options);
+    // Each slot's points, their memory reused from file to file.
+    std::vector<Points> slot_points(static_cast<std::size_t>(slots));
     Progress progress("describe", args.files.size());
     std::atomic<std::size_t> done{0};
     parallel_for_slots(args.files.size(), slots, [&](std::size_t i, int slot) {
         try {
-            const PointCloud cloud = read_cloud(args.files[i]);
-            items[i].points = cloud.points.size();
-            items[i].result = estimators[static_cast<std::size_t>(slot)].compute(cloud.points);
+            EsfEstimator& estimator = estimators[static_cast<std::size_t>(slot)];
+            Points& points = slot_points[static_cast<std::size_t>(slot)];
+            const std::size_t dropped = read_finite_points(args.files[i], points);
+            if (points.size() < 3 && dropped > 0) {
+                // Too few finite points: the whole cloud, for the estimator's own message.
+                items[i].result = estimator.compute(read_cloud(args.files[i]).points);
+            }
+            items[i].result = estimator.compute(points);
+            items[i].result.dropped_points = dropped;
         } catch (const std::exception& e) {
             const std::string what = e.what();
             items[i].error = what.rfind(args.files[i], 0) == 0 ? what : args.files[i] + ": " + what;

@@ -29,6 +29,13 @@ CloudFormat cloud_format_from_path(const std::string& path);
 /// Reads a cloud, choosing the format from the extension.
 PointCloud read_cloud(const std::string& path);
 
+/// The finite points of a cloud file, in file order, into `finite` (replaced; its memory is
+/// reused from call to call): drop_non_finite(read_cloud(path).points, finite), with the same
+/// checks and errors, without building the cloud. Returns how many points were dropped. Labels
+/// and the organised layout are not kept; a binary_compressed PCD's x, y, z columns are
+/// interleaved and filtered in one pass.
+std::size_t read_finite_points(const std::string& path, Points& finite);
+
 PointCloud read_pcd(const std::string& path);
 PointCloud read_pcd(std::istream& in, const std::string& name);
 /// Reads a PCD file already in memory; `name` is used in messages only.
