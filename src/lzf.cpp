@@ -1,5 +1,7 @@
 #include "lzf.hpp"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -9,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "esf_simd.hpp"
 #include "lzf_tokens.hpp"
 
 namespace esf::detail {
@@ -138,6 +141,110 @@ inline void copy_near(unsigned char* op, std::size_t distance, std::size_t len) 
     }
 }
 
+/// Byte shuffles that build the first 32 bytes of a token (AVX2 fast loop): for a back reference
+/// at distance m < 16, byte k of the first 16 bytes is byte k % m of the 16 at the reference, and
+/// byte k of the next 16 is byte (16 + k) % m of the same 16; entry 16 keeps bytes as they are
+/// (literal runs and far references, whose next 16 bytes are loaded from 16 bytes further).
+struct RepeatShuffles {
+    alignas(16) std::array<std::array<std::uint8_t, 16>, 17> first{}, second{};
+};
+
+constexpr RepeatShuffles kRepeatShuffles = [] {
+    RepeatShuffles t{};
+    for (std::size_t m = 1; m <= 16; ++m)
+        for (std::size_t k = 0; k < 16; ++k) {
+            t.first[m][k] = static_cast<std::uint8_t>(m == 16 ? k : k % m);
+            t.second[m][k] = static_cast<std::uint8_t>(m == 16 ? k : (16 + k) % m);
+        }
+    return t;
+}();
+
+/// Where the fast loop stopped: the next token and output byte.
+struct FastLoopEnd {
+    const unsigned char* ip;
+    unsigned char* op;
+};
+
+/// x < bound ? if_below : otherwise, as a compare and a conditional move: a compiler turns a
+/// conditional expression on an unpredictable value into a branch.
+inline std::size_t pick_below(std::size_t x, std::size_t bound, std::size_t if_below,
+                              std::size_t otherwise) {
+    asm("cmp %[bound], %[x]\n\tcmovb %[if_below], %[result]"
+        : [result] "+r"(otherwise)
+        : [x] "r"(x), [bound] "r"(bound), [if_below] "r"(if_below)
+        : "cc");
+    return otherwise;
+}
+
+/// The fast loop once kMaxDistance bytes are produced (every distance is then valid), with one
+/// path for literal runs and back references of up to 32 bytes (16 at distances 16..31): 32
+/// bytes built by two byte shuffles from two 16-byte loads at the literal bytes or the reference,
+/// so that the kind of the next token, which is unpredictable, costs no branch. Longer back
+/// references take copy_far or copy_near. The same bounds as the portable loop (kFastInput,
+/// kFastOutput).
+ESF_TARGET_AVX2 FastLoopEnd fast_loop_shuffles(const unsigned char* ip, unsigned char* op,
+                                               const unsigned char* in_fast_end,
+                                               unsigned char* out_fast_end) {
+    const auto* shuffles = &kRepeatShuffles;
+    while (ip <= in_fast_end && op <= out_fast_end) {
+        const std::size_t ctrl = ip[0], byte1 = ip[1], byte2 = ip[2];
+        // Each choice by a compare and conditional moves (see pick_below), one compare for each
+        // kind: a back reference of 3..8 bytes, or (ctrl >= 224) a long one ...
+        std::size_t distance_byte = byte1, len = (ctrl >> 5) + 2, step = 2;
+        asm("cmp $224, %[ctrl]\n\t"
+            "cmovae %[byte2], %[distance_byte]\n\t"
+            "cmovae %[long_len], %[len]\n\t"
+            "cmovae %[three], %[step]"
+            : [distance_byte] "+r"(distance_byte), [len] "+r"(len), [step] "+r"(step)
+            : [ctrl] "r"(ctrl), [byte2] "r"(byte2), [long_len] "r"(byte1 + 9),
+              [three] "r"(std::size_t{3})
+            : "cc");
+        const std::size_t distance = ((ctrl & 0x1f) << 8) + distance_byte + 1;
+        // ... at most 32 bytes of which one path serves, 16 at distances 16..31; the shuffles'
+        // period, at most 16; the bytes it copies ...
+        std::size_t most = pick_below(distance - 16, 16, 16, 32);
+        std::size_t m = std::min<std::size_t>(distance, 16);
+        auto from = reinterpret_cast<std::uintptr_t>(op - distance);
+        // ... or (ctrl < 32) a literal run of up to 32 bytes.
+        asm("cmp $32, %[ctrl]\n\t"
+            "cmovb %[literal_len], %[len]\n\t"
+            "cmovb %[literal_step], %[step]\n\t"
+            "cmovb %[sixteen], %[m]\n\t"
+            "cmovb %[literal_from], %[from]\n\t"
+            "cmovb %[thirty_two], %[most]"
+            : [len] "+r"(len), [step] "+r"(step), [m] "+r"(m), [from] "+r"(from), [most] "+r"(most)
+            : [ctrl] "r"(ctrl), [literal_len] "r"(ctrl + 1), [literal_step] "r"(ctrl + 2),
+              [sixteen] "r"(std::size_t{16}),
+              [literal_from] "r"(reinterpret_cast<std::uintptr_t>(ip + 1)),
+              [thirty_two] "r"(std::size_t{32})
+            : "cc");
+        if (len > most) {  // a long back reference
+            if (distance >= 16) {
+                copy_far(op, distance, len);
+            } else {
+                copy_near(op, distance, len);
+            }
+            op += len;
+            ip += 3;
+            continue;
+        }
+        // At distance < 16 the next 16 bytes repeat the first ones too: loaded from the same
+        // place (not from bytes that earlier tokens may still be storing).
+        const auto* source = reinterpret_cast<const unsigned char*>(from);
+        const __m128i head = _mm_loadu_si128(reinterpret_cast<const __m128i*>(source));
+        const __m128i tail = _mm_loadu_si128(reinterpret_cast<const __m128i*>(source + (m & 16)));
+        const __m128i first = _mm_shuffle_epi8(
+            head, _mm_load_si128(reinterpret_cast<const __m128i*>(shuffles->first[m].data())));
+        const __m128i second = _mm_shuffle_epi8(
+            tail, _mm_load_si128(reinterpret_cast<const __m128i*>(shuffles->second[m].data())));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(op), first);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(op + 16), second);
+        op += len;
+        ip += step;  // the loop's chain of dependent steps: a load, compares, conditional moves
+    }
+    return {ip, op};
+}
+
 }  // namespace
 
 std::size_t lzf_compress(std::span<const unsigned char> in, std::span<unsigned char> out) {
@@ -209,7 +316,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
 }
 
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out,
-                          std::size_t size) {
+                          std::size_t size, LzfCopies copies) {
     if (size < out.size()) {
         throw std::invalid_argument("lzf_decompress: output larger than the stated size");
     }
@@ -227,11 +334,21 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
 
     // Fast loop, while any token fits with room to spare on both sides: fixed-size copies (see
     // kFastOutput), and only the distance of back references left to check. One branch per kind
-    // of token: literal run, short back reference (one 8-byte word), long back reference.
+    // of token: literal run, short back reference (one 8-byte word), long back reference. Once
+    // 8192 bytes are out (no distance left to check) and where the CPU has AVX2, the kinds share
+    // one path instead (fast_loop_shuffles).
     if (in.size() >= kFastInput && out.size() >= kFastOutput) {
         const unsigned char* const in_fast_end = in_end - kFastInput;
         unsigned char* const out_fast_end = out_end - kFastOutput;
+        bool shuffles = copies == LzfCopies::kBest && esf_avx2_available();
         while (ip <= in_fast_end && op <= out_fast_end) {
+            if (shuffles && static_cast<std::size_t>(op - out.data()) >= kMaxDistance) {
+                const FastLoopEnd end = fast_loop_shuffles(ip, op, in_fast_end, out_fast_end);
+                ip = end.ip;
+                op = end.op;
+                shuffles = false;
+                continue;
+            }
             const std::size_t ctrl = *ip++;
             if (ctrl < 32) {  // literal run of ctrl + 1 bytes: one 32-byte copy serves any length
                 std::memcpy(op, ip, kMaxLiteral);

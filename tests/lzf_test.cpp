@@ -197,7 +197,8 @@ struct Stream {
 
 /// Decodes `packed` into `room` bytes followed by guard bytes, which must come back untouched
 /// (a write past the end, caught in any build); then from a buffer of exactly its size into one
-/// of exactly `room` bytes, so that sanitizer builds catch any read or write past either end.
+/// of exactly `room` bytes, so that sanitizer builds catch any read or write past either end;
+/// then with the portable copies, which must agree.
 std::pair<esf::detail::LzfDecoded, Bytes> decode_exact(const Bytes& packed, std::size_t room) {
     const Bytes in(packed);  // a copy holds exactly packed.size() bytes
     constexpr std::size_t kGuard = 64;
@@ -212,6 +213,17 @@ std::pair<esf::detail::LzfDecoded, Bytes> decode_exact(const Bytes& packed, std:
     const auto decoded = lzf_decompress(in, out);
     EXPECT_EQ(decoded.produced, first.produced);
     out.resize(std::min(decoded.produced, room));
+    // The portable copies (always branching on the kind of token) give the same result.
+    Bytes portable(room);
+    const auto same = lzf_decompress(in, portable, room, esf::detail::LzfCopies::kPortable);
+    EXPECT_EQ(same.produced, decoded.produced);
+    EXPECT_EQ(same.at, decoded.at);
+    EXPECT_EQ(same.error == nullptr, decoded.error == nullptr);
+    if (same.error && decoded.error) {
+        EXPECT_STREQ(same.error, decoded.error);
+    }
+    portable.resize(std::min(same.produced, room));
+    EXPECT_EQ(portable, out);
     return {decoded, out};
 }
 
@@ -269,6 +281,54 @@ TEST(Lzf, DecodesBackReferencesOfEveryDistanceAndLength) {
                     << "distance " << distance << ", length " << len << ", " << after << " after";
             }
         }
+    }
+}
+
+TEST(Lzf, DecodesEveryDistanceAndLengthPastTheFarthestDistance) {
+    // The same once 8192 bytes are out, where every distance is valid and the AVX2 decoder takes
+    // literal runs and references of up to 32 bytes on one path: each reference between literal
+    // runs of every length, and right after another reference (bytes just stored).
+    const Bytes noise = random_bytes(9000, 21);
+    std::vector<std::size_t> distances;
+    for (std::size_t d = 1; d <= 48; ++d) distances.push_back(d);
+    for (const std::size_t d : {63, 64, 65, 100, 1000, 8191, 8192}) distances.push_back(d);
+    std::mt19937 gen(22);
+    for (const std::size_t distance : distances) {
+        Stream s;
+        s.literal(noise);
+        for (std::size_t len = 3; len <= 264; ++len) {
+            s.reference(distance, len);
+            if (len % 3 == 0) s.reference(1 + gen() % 40, 3 + gen() % 30);
+            s.literal(random_bytes(1 + len % 32, static_cast<std::uint32_t>(len)));
+        }
+        for (const std::size_t extra : {0, 1, 17, 300}) {
+            const auto [decoded, out] = decode_exact(s.packed, s.raw.size() + extra);
+            ASSERT_EQ(decoded.error, nullptr) << "distance " << distance << ": " << decoded.error;
+            ASSERT_EQ(out, s.raw) << "distance " << distance << ", room + " << extra;
+        }
+    }
+}
+
+TEST(Lzf, LongRandomTokenStreamsDecode) {
+    // Thousands of random tokens (the fast loops' every path, in every order) after the first
+    // 8192 bytes, against the bytes they were built from.
+    std::mt19937 gen(23);
+    for (int trial = 0; trial < 40; ++trial) {
+        Stream s;
+        s.literal(random_bytes(8192 + gen() % 100, static_cast<std::uint32_t>(gen())));
+        for (std::size_t k = 0; k < 3000; ++k) {
+            const unsigned kind = gen() % 4;
+            if (kind == 0) {
+                s.literal(random_bytes(1 + gen() % 32, static_cast<std::uint32_t>(gen())));
+            } else {
+                const std::size_t distance = 1 + gen() % (kind == 1 ? 16 : kind == 2 ? 64 : 8192);
+                const std::size_t len = 3 + gen() % (gen() % 4 == 0 ? 262 : 30);
+                s.reference(distance, len);
+            }
+        }
+        const auto [decoded, out] = decode_exact(s.packed, s.raw.size());
+        ASSERT_EQ(decoded.error, nullptr) << "trial " << trial;
+        ASSERT_EQ(out, s.raw) << "trial " << trial;
     }
 }
 
