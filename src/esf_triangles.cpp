@@ -255,7 +255,7 @@ ESF_TARGET_AVX512 inline void gather16(const PackedPoint* points, __m512i index,
 }
 
 /// Blocks of indices drawn ahead of their gathers by sample_avx512 when the packed points do not
-/// fit a core's L2 cache (1 MiB on AMD Zen 4, 2 MiB on Intel Sapphire Rapids), their points
+/// fit a core's L2 cache (1 MiB on the AMD EPYC measured, more on the Intel Xeon), their points
 /// prefetched meanwhile: a gather from the 200,000 points of a scene otherwise waits on the L3
 /// cache (a scene's sampling 6 % faster; 4 blocks ahead beat 2 and 8). Smaller clouds gain
 /// nothing from it.
