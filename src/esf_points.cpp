@@ -538,8 +538,11 @@ std::size_t keep_finite_points(std::span<const Eigen::Vector3f> points, SimdLeve
 std::size_t keep_finite_in_place(std::vector<Eigen::Vector3f>& points, SimdLevel simd) {
     const std::size_t n = points.size();
     const std::size_t blocks = simd == SimdLevel::kAvx512 ? n / kLanes : 0;
-    float* p = points.data()->data();
-    std::size_t kept = blocks > 0 ? keep_finite_avx512(p, blocks, p) : 0;
+    std::size_t kept = 0;
+    if (blocks > 0) {
+        float* p = points.data()->data();
+        kept = keep_finite_avx512(p, blocks, p);
+    }
     for (std::size_t i = blocks * kLanes; i < n; ++i)
         if (points[i].allFinite()) points[kept++] = points[i];
     points.resize(kept);
