@@ -14,6 +14,7 @@
 #include "esf/database.hpp"
 #include "esf/depth_image.hpp"
 #include "esf/mesh.hpp"
+#include "lzf.hpp"
 
 namespace {
 
@@ -53,6 +54,29 @@ void pcd_seeds(const fs::path& dir) {
             esf::write_pcd(out, small_cloud(organised, organised), encoding);
             write_file(dir / ("seed" + std::to_string(n++) + ".pcd"), out.str());
         }
+}
+
+/// lzf_fuzz inputs: the output size, the flag for 8,224 bytes of literal runs first, and blocks
+/// compressed by lzf_compress: float columns with runs and repeats (references near and far,
+/// short and long, and literal runs), as a scene's x, y, z blocks hold.
+void lzf_seeds(const fs::path& dir) {
+    for (const std::size_t points : {16u, 700u, 3000u}) {
+        std::vector<unsigned char> raw;
+        for (std::size_t i = 0; i < points; ++i) {
+            const float v = i % 50 < 20 ? 0.0f : 0.5f + 0.001f * static_cast<float>(i % 97);
+            const auto* bytes = reinterpret_cast<const unsigned char*>(&v);
+            raw.insert(raw.end(), bytes, bytes + sizeof v);
+        }
+        std::vector<unsigned char> packed(esf::detail::lzf_compress_bound(raw.size()));
+        packed.resize(esf::detail::lzf_compress(raw, packed));
+        for (const unsigned char flag : {0, 1}) {
+            const auto size = static_cast<std::uint32_t>(raw.size());
+            std::string seed(reinterpret_cast<const char*>(&size), sizeof size);
+            seed.push_back(static_cast<char>(flag));
+            seed.append(reinterpret_cast<const char*>(packed.data()), packed.size());
+            write_file(dir / ("seed" + std::to_string(points) + "_" + std::to_string(flag)), seed);
+        }
+    }
 }
 
 void ply_seeds(const fs::path& dir) {
@@ -193,6 +217,7 @@ int main(int argc, char** argv) {
     try {
         const fs::path root = argv[1];
         pcd_seeds(root / "pcd");
+        lzf_seeds(root / "lzf");
         ply_seeds(root / "ply_cloud");
         xyz_seeds(root / "xyz");
         depth_png_seeds(root / "depth_png");
