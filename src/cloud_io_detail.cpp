@@ -249,36 +249,13 @@ constexpr InterleaveXyz kInterleaveXyz = [] {
     return t;
 }();
 
-/// x, y, z columns of n floats into n points, 16 at a time (two permutes per 16 floats written);
-/// returns the points written, a multiple of 16.
+/// x, y, z columns of n floats into points, 16 at a time (two permutes per 16 floats written);
+/// with kFiniteOnly, only the points whose x, y and z are all finite, each column compressed to
+/// them before the permutes. Writes whole blocks of 48 floats (up to 48 past what is kept);
+/// returns the points written, from the first n / 16 * 16.
+template <bool kFiniteOnly>
 ESF_TARGET_AVX512 std::size_t interleave_xyz_avx512(const char* x, const char* y, const char* z,
                                                     std::size_t n, float* out) {
-    __m512i from_xy[3], from_z[3];
-    for (std::size_t v = 0; v < 3; ++v) {
-        from_xy[v] = _mm512_loadu_si512(kInterleaveXyz.from_xy[v].data());
-        from_z[v] = _mm512_loadu_si512(kInterleaveXyz.from_z[v].data());
-    }
-    const std::size_t blocks = n / 16;
-    for (std::size_t b = 0; b < blocks; ++b) {
-        const __m512 vx = _mm512_loadu_ps(x + 64 * b);
-        const __m512 vy = _mm512_loadu_ps(y + 64 * b);
-        const __m512 vz = _mm512_loadu_ps(z + 64 * b);
-        for (std::size_t v = 0; v < 3; ++v) {
-            const __m512 xy = _mm512_permutex2var_ps(vx, from_xy[v], vy);
-            _mm512_storeu_ps(
-                out + 48 * b + 16 * v,
-                _mm512_mask_permutexvar_ps(xy, kInterleaveXyz.z_mask[v], from_z[v], vz));
-        }
-    }
-    return 16 * blocks;
-}
-
-/// The same, keeping only the points whose x, y and z are all finite: each column compressed to
-/// the kept points before the permutes. Writes up to 48 floats past what is kept; returns the
-/// points kept.
-ESF_TARGET_AVX512 std::size_t interleave_finite_xyz_avx512(const char* x, const char* y,
-                                                           const char* z, std::size_t n,
-                                                           float* out) {
     constexpr int kNonFinite = 0x01 | 0x08 | 0x10 | 0x80;  // quiet NaN, +inf, -inf, signalling NaN
     __m512i from_xy[3], from_z[3];
     for (std::size_t v = 0; v < 3; ++v) {
@@ -286,44 +263,55 @@ ESF_TARGET_AVX512 std::size_t interleave_finite_xyz_avx512(const char* x, const 
         from_z[v] = _mm512_loadu_si512(kInterleaveXyz.from_z[v].data());
     }
     const std::size_t blocks = n / 16;
-    std::size_t kept = 0;
+    std::size_t written = 0;
     for (std::size_t b = 0; b < blocks; ++b) {
         __m512 vx = _mm512_loadu_ps(x + 64 * b);
         __m512 vy = _mm512_loadu_ps(y + 64 * b);
         __m512 vz = _mm512_loadu_ps(z + 64 * b);
-        const auto keep = static_cast<__mmask16>(~(_mm512_fpclass_ps_mask(vx, kNonFinite) |
-                                                   _mm512_fpclass_ps_mask(vy, kNonFinite) |
-                                                   _mm512_fpclass_ps_mask(vz, kNonFinite)));
-        vx = _mm512_maskz_compress_ps(keep, vx);
-        vy = _mm512_maskz_compress_ps(keep, vy);
-        vz = _mm512_maskz_compress_ps(keep, vz);
+        __mmask16 keep = 0xffff;
+        if constexpr (kFiniteOnly) {
+            keep = static_cast<__mmask16>(~(_mm512_fpclass_ps_mask(vx, kNonFinite) |
+                                            _mm512_fpclass_ps_mask(vy, kNonFinite) |
+                                            _mm512_fpclass_ps_mask(vz, kNonFinite)));
+            vx = _mm512_maskz_compress_ps(keep, vx);
+            vy = _mm512_maskz_compress_ps(keep, vy);
+            vz = _mm512_maskz_compress_ps(keep, vz);
+        }
         for (std::size_t v = 0; v < 3; ++v) {
             const __m512 xy = _mm512_permutex2var_ps(vx, from_xy[v], vy);
             _mm512_storeu_ps(
-                out + 3 * kept + 16 * v,
+                out + 3 * written + 16 * v,
                 _mm512_mask_permutexvar_ps(xy, kInterleaveXyz.z_mask[v], from_z[v], vz));
         }
-        kept += static_cast<std::size_t>(std::popcount(static_cast<unsigned>(keep)));
+        written += static_cast<std::size_t>(std::popcount(static_cast<unsigned>(keep)));
     }
-    return kept;
+    return written;
+}
+
+/// Whether x, y and z are float columns of one value each in this host's byte order (the
+/// blocks of a binary_compressed PCD).
+bool float_columns(const XyzColumns& c, bool swap) {
+    return !swap && c.type[0] == Scalar::kF32 && c.type[1] == Scalar::kF32 &&
+           c.type[2] == Scalar::kF32 && c.stride[0] == 4 && c.stride[1] == 4 && c.stride[2] == 4;
 }
 
 }  // namespace
 
+std::size_t drop_non_finite_in_place(Points& points) {
+    return keep_finite_in_place(points, simd_level(EsfKernels::kBest));
+}
+
 std::size_t read_finite_xyz_columns(const XyzColumns& c, bool swap, std::size_t n, Points& finite) {
-    const bool float_columns = !swap && c.type[0] == Scalar::kF32 && c.type[1] == Scalar::kF32 &&
-                               c.type[2] == Scalar::kF32 && c.stride[0] == 4 && c.stride[1] == 4 &&
-                               c.stride[2] == 4;
-    if (!float_columns || !esf_avx512_available()) {
+    if (!float_columns(c, swap) || !esf_avx512_available()) {
         finite.resize(n);
         read_xyz_columns(c, swap, finite);
-        return keep_finite_in_place(finite, simd_level(EsfKernels::kBest));
+        return drop_non_finite_in_place(finite);
     }
     // binary_compressed PCD: x, y and z as three float columns, interleaved and filtered in one
     // pass (+ 16 points of room for the full-width stores).
     finite.resize(n + 16);
     float* out = finite.data()->data();
-    std::size_t kept = interleave_finite_xyz_avx512(c.src[0], c.src[1], c.src[2], n, out);
+    std::size_t kept = interleave_xyz_avx512<true>(c.src[0], c.src[1], c.src[2], n, out);
     for (std::size_t i = n / 16 * 16; i < n; ++i) {
         float p[3];
         for (std::size_t a = 0; a < 3; ++a) std::memcpy(&p[a], c.src[a] + 4 * i, 4);
@@ -352,14 +340,11 @@ void read_xyz_columns(const XyzColumns& c, bool swap, Points& points) {
         }
         return;
     }
-    const bool float_columns = !swap && c.type[0] == Scalar::kF32 && c.type[1] == Scalar::kF32 &&
-                               c.type[2] == Scalar::kF32 && c.stride[0] == 4 && c.stride[1] == 4 &&
-                               c.stride[2] == 4;
-    if (float_columns) {  // binary_compressed PCD: x, y and z as three columns, one pass
+    if (float_columns(c, swap)) {  // binary_compressed PCD: x, y and z as three columns, one pass
         float* out = points.data()->data();
-        const std::size_t done = esf_avx512_available()
-                                     ? interleave_xyz_avx512(c.src[0], c.src[1], c.src[2], n, out)
-                                     : 0;
+        const std::size_t done = esf_avx512_available() ? interleave_xyz_avx512<false>(
+                                                              c.src[0], c.src[1], c.src[2], n, out)
+                                                        : 0;
         for (std::size_t i = done; i < n; ++i)
             for (std::size_t a = 0; a < 3; ++a) std::memcpy(out + 3 * i + a, c.src[a] + 4 * i, 4);
         return;

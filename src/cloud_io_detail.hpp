@@ -213,6 +213,10 @@ struct XyzColumns {
 /// its type chosen once, never per point. `points` must already have its size.
 void read_xyz_columns(const XyzColumns& columns, bool swap, Points& points);
 
+/// Keeps the finite points of `points`, in order, in place (the widest SIMD kernels the CPU
+/// has); returns how many were dropped.
+std::size_t drop_non_finite_in_place(Points& points);
+
 /// The finite points among the first `n` of the columns (none of x, y, z NaN or infinite), in
 /// order, into `finite` (replaced; its memory is reused); returns how many were dropped. Float
 /// columns of one value each (binary_compressed PCD) take one pass, as in read_xyz_columns.

@@ -213,6 +213,13 @@ detail::TraceKernel trace_kernel(EsfKernels kernels) {
 
 }  // namespace
 
+void require_esf_points(std::size_t finite, std::size_t dropped) {
+    if (finite >= 3) return;
+    throw std::invalid_argument(
+        "ESF needs at least 3 finite points, got " + std::to_string(finite) +
+        (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : std::string()));
+}
+
 EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     Workspace& ws = *workspace_;
     const EsfOptions& opt = options_;
@@ -241,12 +248,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
             normalised = detail::normalise_points(points, half, simd, normalisation);
     }
     result.points = points.size();
-    if (points.size() < 3)
-        throw std::invalid_argument(
-            "ESF needs at least 3 finite points, got " + std::to_string(points.size()) +
-            (result.dropped_points
-                 ? " (" + std::to_string(result.dropped_points) + " non-finite dropped)"
-                 : std::string()));
+    require_esf_points(points.size(), result.dropped_points);
     if (points.size() > std::numeric_limits<std::int32_t>::max())
         throw std::invalid_argument("ESF input too large: " + std::to_string(points.size()) +
                                     " points");

@@ -14,7 +14,6 @@
 #include "cloud_io_detail.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/error.hpp"
-#include "esf_points.hpp"
 #include "lzf.hpp"
 #include "number_text.hpp"
 #include "pcd_header.hpp"
@@ -141,9 +140,9 @@ void read_pcd_fields(const char* base, const PcdHeader& h, const std::vector<std
         cloud.points.resize(h.points);
         read_xyz_columns(columns, swap, cloud.points);
     }
-    // Labels are checked even when not kept; uint32 labels (PCL's) need no check.
-    const bool labels_unchecked = h.label && h.fields[*h.label].scalar() == Scalar::kU32;
-    if (h.label && !(out.finite && labels_unchecked)) {
+    // Labels are checked even when not kept, except uint32 ones (PCL's), which are all valid.
+    const bool labels_all_valid = h.label && h.fields[*h.label].scalar() == Scalar::kU32;
+    if (h.label && !(out.finite && labels_all_valid)) {
         cloud.labels.resize(h.points);
         const std::size_t f = *h.label;
         const std::size_t bad =
@@ -245,7 +244,7 @@ PointCloud parse_pcd_into(std::string_view data, const std::string& name, Points
             read_pcd_ascii(data, h, name, cloud);
             if (out.finite) {
                 *out.finite = std::move(cloud.points);
-                out.dropped = keep_finite_in_place(*out.finite, simd_level(EsfKernels::kBest));
+                out.dropped = drop_non_finite_in_place(*out.finite);
                 cloud.points = {};
             }
             break;
@@ -315,8 +314,7 @@ PointCloud read_pcd_into(const std::string& path, PointsOut& out) {
             std::copy_n(bytes + h.data_pos, first, into);
             const std::size_t got = first + file.read(into + first, need - first);
             if (got < need) fail_truncated(path, need, got);  // the file shrank meanwhile
-            if (out.finite)
-                out.dropped = keep_finite_in_place(points, simd_level(EsfKernels::kBest));
+            if (out.finite) out.dropped = drop_non_finite_in_place(points);
             return cloud;
         }
     }

@@ -328,6 +328,24 @@ TEST(EsfDescriptor, NonFinitePointsAreDroppedAndCounted) {
     EXPECT_EQ(result.descriptor, clean);
 }
 
+// The check for callers that drop non-finite points themselves gives compute()'s message.
+TEST(EsfDescriptor, RequiringPointsGivesTheEstimatorsMessage) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    esf::Points points(7, Eigen::Vector3f(nan, 0, 0));
+    points[3] = {1, 2, 3};
+    const std::string from_compute = error_of(points);
+    std::string from_check;
+    try {
+        esf::require_esf_points(1, 6);
+    } catch (const std::invalid_argument& e) {
+        from_check = e.what();
+    }
+    EXPECT_EQ(from_check, from_compute);
+    EXPECT_THAT(from_check, HasSubstr("got 1 (6 non-finite dropped)"));
+    EXPECT_NO_THROW(esf::require_esf_points(3, 0));
+    EXPECT_THROW(esf::require_esf_points(2, 0), std::invalid_argument);
+}
+
 TEST(EsfDescriptor, BadInputGivesClearErrors) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     EXPECT_THAT(error_of({}), HasSubstr("at least 3 finite points, got 0"));

@@ -65,10 +65,7 @@ void run_describe(const DescribeArgs& args) {
             EsfEstimator& estimator = estimators[static_cast<std::size_t>(slot)];
             Points& points = slot_points[static_cast<std::size_t>(slot)];
             const std::size_t dropped = read_finite_points(args.files[i], points);
-            if (points.size() < 3 && dropped > 0) {
-                // Too few finite points: the whole cloud, for the estimator's own message.
-                items[i].result = estimator.compute(read_cloud(args.files[i]).points);
-            }
+            require_esf_points(points.size(), dropped);
             items[i].result = estimator.compute(points);
             items[i].result.dropped_points = dropped;
         } catch (const std::exception& e) {

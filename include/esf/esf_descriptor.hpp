@@ -86,6 +86,12 @@ struct EsfResult {
 /// given size). Throws std::invalid_argument for options out of range (in the constructor) and
 /// for clouds that have no descriptor: fewer than 3 finite points, all points identical, all on
 /// one line (no non-degenerate triangle within the attempt budget), coordinates too large.
+/// Throws the std::invalid_argument that EsfEstimator::compute() throws for a cloud with fewer
+/// than 3 finite points ("ESF needs at least 3 finite points, got 1 (2 non-finite dropped)");
+/// does nothing for 3 or more. For callers that drop the non-finite points before computing
+/// (read_finite_points()), so that the message still counts them.
+void require_esf_points(std::size_t finite, std::size_t dropped);
+
 class EsfEstimator {
   public:
     explicit EsfEstimator(const EsfOptions& options = {});
