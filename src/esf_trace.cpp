@@ -613,25 +613,46 @@ TraceKernelTrials::TraceKernelTrials() {
     if (widest == Kernel::kAvx512Popcnt || widest == Kernel::kAvx512)
         candidates_.push_back(TraceKernel::kAvx2);
     best_.assign(candidates_.size(), std::numeric_limits<double>::infinity());
+    dropped_.assign(candidates_.size(), false);
     decided_ = candidates_.size() == 1;
 }
 
-TraceKernel TraceKernelTrials::next() const {
-    return decided_ ? chosen_ : candidates_[calls_ % candidates_.size()];
-}
+TraceKernel TraceKernelTrials::next() const { return decided_ ? chosen_ : candidates_[turn_]; }
 
 void TraceKernelTrials::record(TraceKernel kernel, double seconds, std::size_t cells) {
     if (decided_) return;
+    if (warm_up_left_ > 0) {
+        --warm_up_left_;
+        return;
+    }
     const auto k = static_cast<std::size_t>(
         std::find(candidates_.begin(), candidates_.end(), kernel) - candidates_.begin());
     if (k < best_.size())
         best_[k] =
             std::min(best_[k], seconds / static_cast<double>(std::max<std::size_t>(cells, 1)));
-    if (++calls_ < kRounds * candidates_.size()) return;
+    // The next candidate still in the trials, or the end of the round.
+    do {
+        if (++turn_ == candidates_.size()) {
+            end_round();
+            return;
+        }
+    } while (dropped_[turn_]);
+}
+
+void TraceKernelTrials::end_round() {
+    turn_ = 0;  // the widest is never dropped
+    ++rounds_;
+    bool others_left = false;
+    for (std::size_t c = 1; c < candidates_.size(); ++c) {
+        if (best_[c] > (1.0 + kDrop) * best_[0]) dropped_[c] = true;
+        others_left = others_left || !dropped_[c];
+    }
+    if (rounds_ < kRounds && others_left) return;
     // The widest (candidate 0) unless another is faster by the margin.
     std::size_t choice = 0;
     for (std::size_t c = 1; c < best_.size(); ++c)
-        if (best_[c] < (1.0 - kMargin) * best_[0] && best_[c] < best_[choice]) choice = c;
+        if (!dropped_[c] && best_[c] < (1.0 - kMargin) * best_[0] && best_[c] < best_[choice])
+            choice = c;
     chosen_ = candidates_[choice];
     decided_ = true;
 }

@@ -89,17 +89,22 @@ void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> st
 const char* trace_kernel_name();
 
 /// Picks the fastest tracing kernel on this CPU by timing the real work: an estimator's first
-/// calls try each SIMD kernel the CPU supports in turn (kRounds rounds, the widest first), and
-/// the one with the least time per visited cell (calls trace different clouds) then traces every
-/// later call. A narrower kernel must beat the widest by kMargin: two kernels within the noise of
-/// each other must not make the choice a coin toss. Gathers, on which the AVX-512
-/// kernels lean, cost very differently across CPUs, so the widest kernel need not be the
-/// fastest. Every kernel gives the same counts: only the speed depends on the choice. Each
-/// estimator holds its own (no shared state).
+/// call runs the widest kernel untimed (it meets cold caches and first touches the working
+/// memory), the next ones try each SIMD kernel the CPU supports in turn (up to kRounds rounds,
+/// the widest first), and the one with the least time per visited cell (calls trace different
+/// clouds) then traces every later call. A narrower kernel must beat the widest by kMargin: two
+/// kernels within the noise of each other must not make the choice a coin toss. After each round, a
+/// narrower kernel slower per cell than the widest's best by more than kDrop takes no further turns
+/// (it cannot come within the margin, and each of its turns costs a slow call); once only the
+/// widest is left, it is chosen. Gathers, on which the AVX-512 kernels lean, cost very differently
+/// across CPUs, so the widest kernel need not be the fastest. Every kernel gives the same counts:
+/// only the speed depends on the choice. Each estimator holds its own (no shared state).
 class TraceKernelTrials {
   public:
     static constexpr int kRounds = 3;
     static constexpr double kMargin = 0.05;
+    static constexpr double kDrop = 0.5;
+    static constexpr int kWarmUpCalls = 1;
 
     TraceKernelTrials();
     /// Whether the choice is made (at once when the CPU offers one kernel).
@@ -110,9 +115,14 @@ class TraceKernelTrials {
     void record(TraceKernel kernel, double seconds, std::size_t cells);
 
   private:
+    void end_round();
+
     std::vector<TraceKernel> candidates_;
-    std::vector<double> best_;
-    std::size_t calls_ = 0;
+    std::vector<double> best_;   // least time per cell so far, per candidate
+    std::vector<bool> dropped_;  // per candidate: no further turns
+    std::size_t turn_ = 0;       // the candidate whose turn it is
+    int warm_up_left_ = kWarmUpCalls;
+    int rounds_ = 0;  // rounds finished
     TraceKernel chosen_ = TraceKernel::kBest;
     bool decided_ = false;
 };

@@ -773,6 +773,17 @@ TEST(FinitePoints, EveryPathKeepsTheFinitePointsInOrder) {
     }
 }
 
+// The first call runs the widest kernel and its time does not count (cold caches): recorded
+// here as far faster than any later call, so that counting it would change every choice below.
+namespace {
+void warm_up(esf::detail::TraceKernelTrials& trials) {
+    for (int i = 0; i < esf::detail::TraceKernelTrials::kWarmUpCalls; ++i) {
+        ASSERT_EQ(trials.next(), esf::detail::TraceKernel::kBest);
+        trials.record(esf::detail::TraceKernel::kBest, 1e-6, 1000);
+    }
+}
+}  // namespace
+
 // Times are compared per visited cell (calls trace different clouds), and a narrower kernel must
 // beat the widest by the margin.
 TEST(TraceKernelTrials, ComparesTimePerCellAndKeepsTheWidestWithinTheMargin) {
@@ -781,6 +792,7 @@ TEST(TraceKernelTrials, ComparesTimePerCellAndKeepsTheWidestWithinTheMargin) {
     for (const double narrower_speed : {0.98, 0.90}) {  // time per cell against the widest
         TraceKernelTrials trials;
         if (trials.decided()) return;  // one kernel on this CPU
+        warm_up(trials);
         while (!trials.decided()) {
             const TraceKernel kernel = trials.next();
             // The widest traces twice the cells in twice the time: the same time per cell.
@@ -795,6 +807,54 @@ TEST(TraceKernelTrials, ComparesTimePerCellAndKeepsTheWidestWithinTheMargin) {
     }
 }
 
+// A narrower kernel far slower than the widest takes no more turns after the round in which it
+// fell behind; one within kDrop takes all its turns.
+TEST(TraceKernelTrials, DropsKernelsFarSlowerThanTheWidestAfterARound) {
+    using esf::detail::TraceKernel;
+    using esf::detail::TraceKernelTrials;
+    {
+        TraceKernelTrials trials;
+        if (trials.decided()) return;  // one kernel on this CPU
+    }
+    for (const double slower :
+         {1.0 + TraceKernelTrials::kDrop + 0.05, 1.0 + TraceKernelTrials::kDrop - 0.05}) {
+        TraceKernelTrials trials;
+        warm_up(trials);
+        std::vector<TraceKernel> tried;
+        while (!trials.decided() && tried.size() < 100) {
+            const TraceKernel kernel = trials.next();
+            tried.push_back(kernel);
+            trials.record(kernel, kernel == TraceKernel::kBest ? 1.0 : slower, 1000);
+        }
+        ASSERT_TRUE(trials.decided());
+        EXPECT_EQ(trials.next(), TraceKernel::kBest) << slower;
+        const std::size_t kinds = static_cast<std::size_t>(
+            std::find(tried.begin() + 1, tried.end(), TraceKernel::kBest) - tried.begin());
+        if (slower > 1.0 + TraceKernelTrials::kDrop) {
+            // One round, then the widest alone is left: chosen at once.
+            EXPECT_EQ(tried.size(), kinds) << slower;
+        } else {
+            EXPECT_EQ(tried.size(), kinds * TraceKernelTrials::kRounds) << slower;
+        }
+    }
+    // Dropped after the second round: the narrower kernels were as fast as the widest in the
+    // first, then the widest got twice as fast.
+    TraceKernelTrials trials;
+    warm_up(trials);
+    std::vector<TraceKernel> tried;
+    while (!trials.decided() && tried.size() < 100) {
+        const TraceKernel kernel = trials.next();
+        const bool widest_again = kernel == TraceKernel::kBest && !tried.empty();
+        tried.push_back(kernel);
+        trials.record(kernel, widest_again ? 0.5 : 1.0, 1000);
+    }
+    ASSERT_TRUE(trials.decided());
+    EXPECT_EQ(trials.next(), TraceKernel::kBest);
+    const auto kinds = static_cast<std::size_t>(
+        std::find(tried.begin() + 1, tried.end(), TraceKernel::kBest) - tried.begin());
+    EXPECT_EQ(tried.size(), 2 * kinds);
+}
+
 TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
     using esf::detail::TraceKernel;
     esf::detail::TraceKernelTrials trials;
@@ -802,6 +862,7 @@ TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
         EXPECT_EQ(trials.next(), TraceKernel::kBest);
         return;
     }
+    warm_up(trials);
     std::vector<TraceKernel> tried;
     while (!trials.decided() && tried.size() < 100) {
         const TraceKernel kernel = trials.next();
