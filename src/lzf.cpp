@@ -141,6 +141,15 @@ inline void copy_near(unsigned char* op, std::size_t distance, std::size_t len) 
     }
 }
 
+/// Back reference of len >= 9 bytes at any distance (copy_far or copy_near).
+inline void copy_long_reference(unsigned char* op, std::size_t distance, std::size_t len) {
+    if (distance >= 16) {
+        copy_far(op, distance, len);
+    } else {
+        copy_near(op, distance, len);
+    }
+}
+
 /// Byte shuffles that build the first 32 bytes of a token (AVX2 fast loop): for a back reference
 /// at distance m < 16, byte k of the first 16 bytes is byte k % m of the 16 at the reference, and
 /// byte k of the next 16 is byte (16 + k) % m of the same 16; entry 16 keeps bytes as they are
@@ -180,7 +189,7 @@ inline std::size_t pick_below(std::size_t x, std::size_t bound, std::size_t if_b
 /// path for literal runs and back references of up to 32 bytes (16 at distances 16..31): 32
 /// bytes built by two byte shuffles from two 16-byte loads at the literal bytes or the reference,
 /// so that the kind of the next token, which is unpredictable, costs no branch. Longer back
-/// references take copy_far or copy_near. The same bounds as the portable loop (kFastInput,
+/// references take copy_long_reference. The same bounds as the portable loop (kFastInput,
 /// kFastOutput).
 ESF_TARGET_AVX2 FastLoopEnd fast_loop_shuffles(const unsigned char* ip, unsigned char* op,
                                                const unsigned char* in_fast_end,
@@ -219,11 +228,7 @@ ESF_TARGET_AVX2 FastLoopEnd fast_loop_shuffles(const unsigned char* ip, unsigned
               [thirty_two] "r"(std::size_t{32})
             : "cc");
         if (len > most) {  // a long back reference
-            if (distance >= 16) {
-                copy_far(op, distance, len);
-            } else {
-                copy_near(op, distance, len);
-            }
+            copy_long_reference(op, distance, len);
             op += len;
             ip += 3;
             continue;
@@ -371,11 +376,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
             if (distance > produced) {
                 return corrupt("back reference before the start of the output");
             }
-            if (distance >= 16) {
-                copy_far(op, distance, len);
-            } else {
-                copy_near(op, distance, len);
-            }
+            copy_long_reference(op, distance, len);
             op += len;
         }
     }

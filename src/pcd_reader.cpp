@@ -14,6 +14,7 @@
 #include "cloud_io_detail.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/error.hpp"
+#include "esf/point_cloud.hpp"
 #include "lzf.hpp"
 #include "number_text.hpp"
 #include "pcd_header.hpp"
@@ -242,11 +243,7 @@ PointCloud parse_pcd_into(std::string_view data, const std::string& name, Points
     switch (h.data) {
         case PcdData::kAscii:
             read_pcd_ascii(data, h, name, cloud);
-            if (out.finite) {
-                *out.finite = std::move(cloud.points);
-                out.dropped = drop_non_finite_in_place(*out.finite);
-                cloud.points = {};
-            }
+            if (out.finite) out.dropped = drop_non_finite(cloud.points, *out.finite);
             break;
         case PcdData::kBinary:
             read_pcd_binary(data, h, name, cloud, out);
