@@ -103,7 +103,7 @@ class TraceKernelTrials {
   public:
     static constexpr int kRounds = 3;
     static constexpr double kMargin = 0.05;
-    static constexpr double kDrop = 0.5;
+    static constexpr double kDrop = 0.2;
     static constexpr int kWarmUpCalls = 1;
 
     TraceKernelTrials();
