@@ -14,17 +14,12 @@
 # 640 x 480 scenes.
 set -euo pipefail
 
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${1:-$root/build}"
+bench_name=cloud_io_batch
+source "$(dirname "${BASH_SOURCE[0]}")/bench_env.sh"
 max_files="${2:-200}"
 subdir="${3:-real}"
-data="${ESF_DATA:-$root/../shared/data}"
-esf="$build/apps/esf/esf"
-pcl="$build/bench/pcl_esf_describe"
-for tool in "$esf" "$pcl"; do
-    [[ -x "$tool" ]] || { echo "cloud_io_batch: missing $tool (cmake --build $build)" >&2; exit 1; }
-done
-[[ -d "$data/$subdir" ]] || { echo "cloud_io_batch: no $data/$subdir (set ESF_DATA)" >&2; exit 1; }
+require_tools "$esf" "$pcl"
+require_data "$data/$subdir"
 
 mapfile -t files < <(find "$data/$subdir" -name '*.pcd' -type f | sort | head -n "$max_files")
 [[ ${#files[@]} -gt 0 ]] || { echo "cloud_io_batch: no .pcd files under $data/$subdir" >&2; exit 1; }
@@ -33,9 +28,7 @@ mapfile -t files < <(find "$data/$subdir" -name '*.pcd' -type f | sort | head -n
 cat "${files[@]}" > /dev/null
 
 # One process per file, ours and PCL's alternating (and swapping which goes first) so that both
-# meet the same machine load. Times come from $EPOCHREALTIME (bash 5) read into variables: a
-# command substitution would fork a subshell, whose cost would be counted on both sides.
-us() { REPLY=$((10#${1/./})); }
+# meet the same machine load (times by us(), bench_env.sh).
 esf_us=0
 pcl_us=0
 for i in "${!files[@]}"; do

@@ -11,22 +11,16 @@
 # usage: bench/speed_summary.sh [BUILD_DIR]   (default: build; ESF_DATA as for cloud_io_batch.sh)
 set -euo pipefail
 
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${1:-$root/build}"
-data="${ESF_DATA:-$root/../shared/data}"
-esf="$build/apps/esf/esf"
-pcl="$build/bench/pcl_esf_describe"
+bench_name=speed_summary
+source "$(dirname "${BASH_SOURCE[0]}")/bench_env.sh"
 bench="$build/bench/esf_bench_descriptor"
-for tool in "$esf" "$pcl" "$bench"; do
-    [[ -x "$tool" ]] || { echo "speed_summary: missing $tool (cmake --build $build)" >&2; exit 1; }
-done
-[[ -d "$data/real/objects" ]] || { echo "speed_summary: no $data/real (set ESF_DATA)" >&2; exit 1; }
+require_tools "$esf" "$pcl" "$bench"
+require_data "$data/real/objects"
 
 cpu="$(lscpu 2>/dev/null | sed -n 's/^Model name: *//p' | head -n 1)"
 echo "cpu: ${cpu:-unknown}"
 
 # Mean wall time of a command over N runs, in ms, without a subshell per run.
-us() { REPLY=$((10#${1/./})); }
 mean_ms() {
     local runs=$1
     shift
