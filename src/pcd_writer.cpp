@@ -1,4 +1,4 @@
-// Writing PCD files: x y z (and label), PCL's header, ascii / binary / binary_compressed.
+// Writing PCD files: x y z (and rgb, label), PCL's header, ascii / binary / binary_compressed.
 
 #include <array>
 #include <cstring>
@@ -29,9 +29,14 @@ void put_le(char* out, T value) {
 
 std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
     const std::size_t n = cloud.points.size();
+    const bool with_rgb = !cloud.rgb.empty();
     const bool with_labels = !cloud.labels.empty();
     if (with_labels && cloud.labels.size() != n) {
         throw std::invalid_argument("write_pcd: " + str(cloud.labels.size()) + " labels for " +
+                                    str(n) + " points");
+    }
+    if (with_rgb && cloud.rgb.size() != n) {
+        throw std::invalid_argument("write_pcd: " + str(cloud.rgb.size()) + " colours for " +
                                     str(n) + " points");
     }
     if (n > std::numeric_limits<std::uint32_t>::max()) {
@@ -42,12 +47,23 @@ std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
         width = static_cast<std::uint32_t>(n);
         height = 1;
     }
+    // The unsigned fields after x y z: rgb (0x00RRGGBB, as PCL packs it), then label.
+    std::vector<const std::vector<std::uint32_t>*> extra;
+    std::string names = "x y z", sizes = "4 4 4", types = "F F F", counts = "1 1 1";
+    const auto add_field = [&](const char* name, const std::vector<std::uint32_t>& values) {
+        extra.push_back(&values);
+        names += std::string(" ") + name;
+        sizes += " 4";
+        types += " U";
+        counts += " 1";
+    };
+    if (with_rgb) add_field("rgb", cloud.rgb);
+    if (with_labels) add_field("label", cloud.labels);
     std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n";
-    out += with_labels ? "FIELDS x y z label\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\n"
-                       : "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+    out += "FIELDS " + names + "\nSIZE " + sizes + "\nTYPE " + types + "\nCOUNT " + counts + "\n";
     out += "WIDTH " + str(width) + "\nHEIGHT " + str(height) +
            "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + str(n) + "\n";
-    const std::size_t fields = with_labels ? 4 : 3;
+    const std::size_t fields = 3 + extra.size();
     const std::size_t point_step = 4 * fields;
 
     if (encoding == PcdEncoding::kAscii) {
@@ -61,9 +77,9 @@ std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
             append_float(out, p.y());
             out += ' ';
             append_float(out, p.z());
-            if (with_labels) {
+            for (const std::vector<std::uint32_t>* values : extra) {
                 out += ' ';
-                append_uint(out, cloud.labels[i]);
+                append_uint(out, (*values)[i]);
             }
             out += '\n';
         }
@@ -73,7 +89,7 @@ std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
         out += "DATA binary\n";
         std::size_t pos = out.size();
         out.resize(pos + n * point_step);
-        if (!with_labels && kLittleEndianHost && n > 0) {
+        if (extra.empty() && kLittleEndianHost && n > 0) {
             std::memcpy(out.data() + pos, cloud.points.data(), n * point_step);
             return out;
         }
@@ -82,7 +98,8 @@ std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
                 put_le(out.data() + pos + 4 * static_cast<std::size_t>(axis),
                        cloud.points[i][axis]);
             }
-            if (with_labels) put_le(out.data() + pos + 12, cloud.labels[i]);
+            for (std::size_t f = 0; f < extra.size(); ++f)
+                put_le(out.data() + pos + 12 + 4 * f, (*extra[f])[i]);
         }
         return out;
     }
@@ -100,7 +117,8 @@ std::string encode_pcd(const PointCloud& cloud, PcdEncoding encoding) {
         for (int axis = 0; axis < 3; ++axis) {
             put_le(soa + 4 * (static_cast<std::size_t>(axis) * n + i), cloud.points[i][axis]);
         }
-        if (with_labels) put_le(soa + 4 * (3 * n + i), cloud.labels[i]);
+        for (std::size_t f = 0; f < extra.size(); ++f)
+            put_le(soa + 4 * ((3 + f) * n + i), (*extra[f])[i]);
     }
     const std::size_t pos = out.size();
     out.resize(pos + 8 + lzf_compress_bound(raw.size()));

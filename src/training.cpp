@@ -160,11 +160,8 @@ void check_settings(const Database& db, const Settings& wanted) {
 
 /// A model being trained: its inputs, its renderer, then the entry to store.
 struct Job {
+    const PlannedModel* plan = nullptr;
     const ModelFile* file = nullptr;
-    std::string group;
-    bool rescale = false;        ///< non-metric: scale to target_extent
-    double extent = 0.0;         ///< catalog extent (file units); 0: the mesh's bounding box
-    double target_extent = 0.0;  ///< metres
     std::uint64_t seed = 0;
     std::unique_ptr<MeshRenderer> renderer;
     ModelEntry entry;
@@ -175,18 +172,13 @@ void prepare_job(Job& job, const TrainingOptions& options) {
     job.entry.category = job.file->category;
     job.entry.name = job.file->name;
     job.entry.file = job.file->file;
-    job.entry.group = job.group;
+    job.entry.group = job.plan->group;
     try {
         const Mesh mesh = load_mesh(job.file->path);
         RenderOptions render = options.render;
         render.seed = job.seed;
-        if (job.rescale) {
-            double extent = job.extent;
-            if (!(extent > 0.0))
-                extent = static_cast<double>((mesh.max_corner() - mesh.min_corner()).maxCoeff());
-            if (!(extent > 0.0) || !std::isfinite(extent))
-                throw std::invalid_argument(job.file->path + ": mesh has no extent to rescale");
-            render.scale = job.target_extent / extent;
+        if (job.plan->rescale) {
+            render.scale = job.plan->scale(mesh);
             render.target_extent.reset();
         }
         if (render.distance) {
@@ -401,6 +393,126 @@ std::uint64_t view_seed(std::uint64_t model_seed_value, int view_index) {
                  detail::kGoldenGamma * (static_cast<std::uint64_t>(view_index) + 1));
 }
 
+namespace {
+
+// The catalog a run reads: `catalog`, or ROOT/catalog.csv when it exists; empty for none.
+std::string catalog_path(const std::string& root, const std::string& catalog, bool use_catalog) {
+    if (!use_catalog) return {};
+    if (!catalog.empty()) return catalog;
+    const fs::path beside = fs::path(root) / "catalog.csv";
+    return fs::exists(beside) ? beside.string() : std::string{};
+}
+
+// FNV-1a of a name, mixed: the order groups are dealt into folds.
+std::uint64_t group_hash(const std::string& name) {
+    std::uint64_t h = 0xcbf29ce484222325ull;
+    for (const unsigned char c : name) h = (h ^ c) * 0x100000001b3ull;
+    return detail::mix64(h);
+}
+
+}  // namespace
+
+void parse_fold(const std::string& text, GroupSelection& selection) {
+    const auto slash = text.find('/');
+    int k = -1, n = -1;
+    try {
+        std::size_t used_k = 0, used_n = 0;
+        if (slash != std::string::npos) {
+            k = std::stoi(text.substr(0, slash), &used_k);
+            n = std::stoi(text.substr(slash + 1), &used_n);
+            if (used_k != slash || used_n != text.size() - slash - 1) k = n = -1;
+        }
+    } catch (const std::exception&) {
+        k = n = -1;
+    }
+    if (n < 2 || n > 100 || k < 0 || k >= n)
+        throw std::invalid_argument("bad fold '" + text +
+                                    "': expected K/N with 0 <= K < N and 2 <= N <= 100");
+    selection.fold = k;
+    selection.folds = n;
+}
+
+double PlannedModel::scale(const Mesh& mesh, double metric_scale) const {
+    if (!rescale) return metric_scale;
+    double e = extent;
+    if (!(e > 0.0)) e = static_cast<double>((mesh.max_corner() - mesh.min_corner()).maxCoeff());
+    if (!(e > 0.0) || !std::isfinite(e))
+        throw std::invalid_argument(file.path + ": mesh has no extent to rescale");
+    return target_extent / e;
+}
+
+std::vector<PlannedModel> plan_models(const std::string& root, const std::string& catalog_file,
+                                      bool use_catalog, const GroupSelection& selection) {
+    const std::vector<ModelFile> files = find_models(root);
+    if (files.empty())
+        throw std::invalid_argument(file_message(
+            root, 0, "no meshes found (expected ROOT/<category>/<model>.ply, .obj, .off, ...)"));
+    const std::string path = catalog_path(root, catalog_file, use_catalog);
+    const Catalog catalog = path.empty() ? Catalog{} : read_catalog(path);
+
+    std::vector<PlannedModel> plans;
+    for (const ModelFile& f : files) {
+        PlannedModel plan;
+        plan.file = f;
+        plan.group = f.name;
+        if (const CatalogEntry* entry = catalog.find(f.file)) {
+            if (!entry->group.empty()) plan.group = entry->group;
+            if (!entry->metric) {
+                plan.rescale = true;
+                plan.extent = entry->extent;
+                plan.target_extent = typical_extent(catalog, f.category);
+            }
+        }
+        plans.push_back(std::move(plan));
+    }
+    if (selection.empty()) return plans;
+
+    for (const auto* names : {&selection.only, &selection.except})
+        for (const std::string& name : *names)
+            if (std::none_of(plans.begin(), plans.end(),
+                             [&](const PlannedModel& p) { return p.group == name; }))
+                throw std::invalid_argument("no group '" + name + "' among the models of " + root);
+    if (selection.folds > 1 && (selection.fold < 0 || selection.fold >= selection.folds))
+        throw std::invalid_argument("fold " + std::to_string(selection.fold) + " is not in [0, " +
+                                    std::to_string(selection.folds) + ")");
+
+    // Each category's groups, in hash order, dealt round-robin into the folds.
+    std::map<std::string, int> fold_of;
+    if (selection.folds > 1) {
+        std::map<std::string, std::vector<std::string>> groups_of;
+        for (const PlannedModel& p : plans) groups_of[p.file.category].push_back(p.group);
+        for (auto& [category, groups] : groups_of) {
+            std::sort(groups.begin(), groups.end());
+            groups.erase(std::unique(groups.begin(), groups.end()), groups.end());
+            if (groups.size() < 2) continue;
+            std::sort(groups.begin(), groups.end(), [](const std::string& a, const std::string& b) {
+                const std::uint64_t ha = group_hash(a), hb = group_hash(b);
+                return ha != hb ? ha < hb : a < b;
+            });
+            const std::uint64_t start =
+                group_hash(category) % static_cast<std::uint64_t>(selection.folds);
+            for (std::size_t i = 0; i < groups.size(); ++i)
+                fold_of.emplace(groups[i], static_cast<int>((start + i) % selection.folds));
+        }
+    }
+    const auto contains = [](const std::vector<std::string>& list, const std::string& name) {
+        return std::find(list.begin(), list.end(), name) != list.end();
+    };
+    std::vector<PlannedModel> kept;
+    for (PlannedModel& p : plans) {
+        if (!selection.only.empty() && !contains(selection.only, p.group)) continue;
+        if (contains(selection.except, p.group)) continue;
+        if (selection.folds > 1) {
+            const auto it = fold_of.find(p.group);
+            const bool in_fold = it != fold_of.end() && it->second == selection.fold;
+            if (in_fold == selection.other_folds) continue;
+        }
+        kept.push_back(std::move(p));
+    }
+    if (kept.empty()) throw std::invalid_argument("the group selection leaves no model of " + root);
+    return kept;
+}
+
 Settings training_settings(const TrainingOptions& options, bool rescale_non_metric) {
     const auto& r = options.render;
     Settings settings = descriptor_settings(descriptor_setup(options));
@@ -433,22 +545,9 @@ TrainingResult train(const std::string& root, Database& database, const Training
     if (!database.writable())
         throw std::invalid_argument(
             file_message(database.path(), 0, "database is opened read-only"));
-    const std::vector<ModelFile> files = find_models(root);
-    if (files.empty())
-        throw std::invalid_argument(file_message(
-            root, 0, "no meshes found (expected ROOT/<category>/<model>.ply, .obj, .off, ...)"));
-
-    Catalog catalog;
-    bool have_catalog = false;
-    if (options.use_catalog) {
-        std::string path = options.catalog;
-        if (path.empty() && fs::exists(fs::path(root) / "catalog.csv"))
-            path = (fs::path(root) / "catalog.csv").string();
-        if (!path.empty()) {
-            catalog = read_catalog(path);
-            have_catalog = true;
-        }
-    }
+    const bool have_catalog = !catalog_path(root, options.catalog, options.use_catalog).empty();
+    const std::vector<PlannedModel> plans =
+        plan_models(root, options.catalog, options.use_catalog, options.groups);
 
     const Settings settings = training_settings(options, have_catalog);
     if (database.settings().empty() && database.models().empty())
@@ -459,25 +558,18 @@ TrainingResult train(const std::string& root, Database& database, const Training
     database.add_descriptor_kind(descriptor_kind(setup));
 
     TrainingResult result;
-    result.models_total = files.size();
+    result.models_total = plans.size();
     std::vector<Job> jobs;
-    for (const auto& f : files) {
+    for (const PlannedModel& plan : plans) {
+        const ModelFile& f = plan.file;
         if (database.model_status(f.category, f.name) == ModelStatus::kComplete) {
             ++result.models_existing;
             continue;
         }
         Job job;
+        job.plan = &plan;
         job.file = &f;
-        job.group = f.name;
         job.seed = model_seed(options.seed, f.category, f.name);
-        if (const CatalogEntry* entry = have_catalog ? catalog.find(f.file) : nullptr) {
-            if (!entry->group.empty()) job.group = entry->group;
-            if (!entry->metric) {
-                job.rescale = true;
-                job.extent = entry->extent;
-                job.target_extent = typical_extent(catalog, f.category);
-            }
-        }
         jobs.push_back(std::move(job));
     }
 

@@ -665,7 +665,7 @@ TEST_F(RecognizerTest, ClustersThatCannotBeDescribedAreReportedPerObject) {
     segmentation.grouping = esf::Grouping::kEuclidean;  // a solid block: no surface to patch
     const esf::Recognizer recognizer(db_path_);
     const esf::SceneRecognition result = recognizer.recognize_scene(
-        esf::PointCloud{scene, static_cast<std::uint32_t>(scene.size()), 1, {}}, segmentation);
+        esf::PointCloud{scene, static_cast<std::uint32_t>(scene.size()), 1, {}, {}}, segmentation);
     ASSERT_TRUE(result.plane_found);
     ASSERT_EQ(result.objects.size(), 3u) << result.message;
     EXPECT_EQ(result.objects[0].cluster.points.size(), 1000u);
@@ -682,7 +682,7 @@ TEST_F(RecognizerTest, SceneWithoutPlaneOrObjectsSaysSo) {
     const esf::Recognizer recognizer(db_path_);
     esf::Points table = table_points();
     const esf::SceneRecognition empty = recognizer.recognize_scene(
-        esf::PointCloud{table, static_cast<std::uint32_t>(table.size()), 1, {}});
+        esf::PointCloud{table, static_cast<std::uint32_t>(table.size()), 1, {}, {}});
     EXPECT_TRUE(empty.plane_found);
     EXPECT_TRUE(empty.objects.empty());
     EXPECT_CONTAINS(empty.message, "no objects");
@@ -692,7 +692,7 @@ TEST_F(RecognizerTest, SceneWithoutPlaneOrObjectsSaysSo) {
     esf::Points cloud;
     for (int i = 0; i < 5000; ++i) cloud.push_back({u(rng), u(rng), 2.0f + u(rng)});
     const esf::SceneRecognition none = recognizer.recognize_scene(
-        esf::PointCloud{cloud, static_cast<std::uint32_t>(cloud.size()), 1, {}});
+        esf::PointCloud{cloud, static_cast<std::uint32_t>(cloud.size()), 1, {}, {}});
     EXPECT_FALSE(none.plane_found);
     EXPECT_TRUE(none.objects.empty());
     EXPECT_CONTAINS(none.message, "no dominant plane");

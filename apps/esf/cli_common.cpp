@@ -100,4 +100,53 @@ void Progress::finish() {
     std::fprintf(stderr, "\n");
 }
 
+namespace {
+
+CLI::Validator fold_text() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            esf::GroupSelection selection;
+            try {
+                parse_fold(text, selection);
+            } catch (const std::invalid_argument& e) {
+                return e.what();
+            }
+            return {};
+        },
+        "K/N");
+}
+
+}  // namespace
+
+void GroupOptions::add_to(CLI::App& cmd) {
+    cmd.add_option("--groups", only_, "Only the models of these catalog groups (comma-separated)")
+        ->delimiter(',');
+    cmd.add_option("--exclude-groups", except_,
+                   "Not the models of these catalog groups (comma-separated)")
+        ->delimiter(',');
+    auto* fold =
+        cmd.add_option(
+               "--fold", fold_,
+               "K/N: only the groups of fold K of N (each category's groups dealt into N folds; a "
+               "category with one group is in none)")
+            ->check(fold_text());
+    cmd.add_option("--other-folds", other_folds_,
+                   "K/N: every group but those of fold K of N (train on these, generate or "
+                   "evaluate on --fold K/N)")
+        ->check(fold_text())
+        ->excludes(fold);
+}
+
+esf::GroupSelection GroupOptions::selection() const {
+    esf::GroupSelection selection;
+    selection.only = only_;
+    selection.except = except_;
+    if (!fold_.empty()) parse_fold(fold_, selection);
+    if (!other_folds_.empty()) {
+        parse_fold(other_folds_, selection);
+        selection.other_folds = true;
+    }
+    return selection;
+}
+
 }  // namespace esf::cli

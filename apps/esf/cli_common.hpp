@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "esf/training.hpp"
 
 namespace esf::cli {
 
@@ -27,6 +30,18 @@ CLI::Validator non_negative_seed();
 /// A warning line on stderr when `database` holds learned weights of `descriptor` (empty: the
 /// only kind) that were learned before the database last changed: they are ignored.
 void warn_if_weights_stale(const std::string& database, const std::string& descriptor);
+
+/// --groups, --exclude-groups, --fold K/N and --other-folds K/N: which catalog groups of a root
+/// a command takes (esf::GroupSelection). Call selection() after parsing.
+class GroupOptions {
+  public:
+    void add_to(CLI::App& cmd);
+    esf::GroupSelection selection() const;
+
+  private:
+    std::vector<std::string> only_, except_;
+    std::string fold_, other_folds_;
+};
 
 /// True when stderr is a terminal (progress bars are drawn only then).
 bool stderr_is_terminal();

@@ -38,6 +38,7 @@ struct TrainArgs {
     std::size_t min_points = 50;
     std::string catalog;
     bool no_catalog = false;
+    GroupOptions groups;
     bool json = false;
 };
 
@@ -71,6 +72,7 @@ void run_train(const TrainArgs& args) {
     options.threads = args.threads;
     options.catalog = args.catalog;
     options.use_catalog = !args.no_catalog;
+    options.groups = args.groups.selection();
 
     const auto start = std::chrono::steady_clock::now();
     std::optional<Progress> bar;
@@ -214,6 +216,7 @@ void add_train_command(CLI::App& app) {
     cmd->add_flag("--no-catalog", args->no_catalog,
                   "Ignore any catalog: all models metric, each its own group")
         ->excludes(catalog);
+    args->groups.add_to(*cmd);
     cmd->add_flag("--json", args->json, "Print the run's summary as one JSON object");
     cmd->callback([args] { run_train(*args); });
 }

@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
     esf::cli::add_compare_command(app);
     esf::cli::add_eval_command(app);
     esf::cli::add_learn_weights_command(app);
+    esf::cli::add_generate_scenes_command(app);
     // @commands: one add_<name>_command(app) call per command above this line
     try {
         app.parse(argc, argv);

@@ -52,8 +52,9 @@ PointCloud parse_xyz(std::string_view bytes, const std::string& name);
 
 enum class PcdEncoding { kAscii, kBinary, kBinaryCompressed };
 
-/// Writes x y z (and `label` when the cloud has labels), keeping width x height. The file is
-/// written to a temporary name beside the target and renamed, so a failure leaves no partial file.
+/// Writes x y z (then `rgb` and `label` when the cloud has colours or labels), keeping width x
+/// height. The file is written to a temporary name beside the target and renamed, so a failure
+/// leaves no partial file.
 void write_pcd(const std::string& path, const PointCloud& cloud,
                PcdEncoding encoding = PcdEncoding::kBinary);
 void write_pcd(std::ostream& out, const PointCloud& cloud,

@@ -19,6 +19,8 @@ struct PointCloud {
     std::uint32_t width = 0;
     std::uint32_t height = 1;
     std::vector<std::uint32_t> labels;
+    /// Empty or one colour per point, packed 0x00RRGGBB as PCL does (written by write_pcd).
+    std::vector<std::uint32_t> rgb;
 
     bool organised() const { return height > 1; }
 };

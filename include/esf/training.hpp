@@ -72,6 +72,48 @@ Catalog read_catalog(const std::string& path);
 double typical_extent(const Catalog& catalog, const std::string& category);
 inline constexpr double kDefaultTypicalExtent = 0.15;
 
+/// Which models of a root a run takes, by their catalog group (a model without a catalog entry,
+/// or with an empty group, is a group of its own named after the model). Evaluation on models a
+/// database does not hold takes the same selection both ways: `esf generate-scenes --fold 0/3`
+/// and `esf train --other-folds 0/3` see disjoint groups.
+struct GroupSelection {
+    std::vector<std::string> only;    ///< non-empty: only these groups
+    std::vector<std::string> except;  ///< never these groups
+    /// With folds > 1: the groups of each category are dealt into `folds` folds in an order
+    /// fixed by a hash of their names (so every fold holds groups of most categories); a
+    /// category with a single group is in no fold (it stays on the training side). `fold` in
+    /// [0, folds) takes that fold's groups; with other_folds, every group but them.
+    int fold = 0;
+    int folds = 0;
+    bool other_folds = false;
+
+    bool empty() const { return only.empty() && except.empty() && folds <= 1; }
+};
+
+/// Parses "K/N" (fold K of N, 0 <= K < N, 2 <= N <= 100) into selection.fold / folds; throws
+/// std::invalid_argument naming the text otherwise.
+void parse_fold(const std::string& text, GroupSelection& selection);
+
+/// A model as a run takes it: its file, its group and how it is scaled to metres.
+struct PlannedModel {
+    ModelFile file;
+    std::string group;           ///< catalog group, or the model's name
+    bool rescale = false;        ///< non-metric: scaled to target_extent
+    double extent = 0.0;         ///< catalog extent (file units); 0: the mesh's bounding box
+    double target_extent = 0.0;  ///< metres
+    /// The file units -> metres factor for `mesh`: target_extent / extent when rescaled (the
+    /// mesh's longest bounding box side standing in for an unknown extent), else
+    /// `metric_scale`. Throws std::invalid_argument for a mesh without extent.
+    double scale(const Mesh& mesh, double metric_scale = 1.0) const;
+};
+
+/// The models under `root` (find_models) with their catalog groups and scaling, those of
+/// `selection` only. `catalog`: a catalog CSV, or empty for ROOT/catalog.csv when it exists;
+/// use_catalog false ignores any. Throws like find_models and read_catalog, and
+/// std::invalid_argument when a group named in `selection` is not among the root's.
+std::vector<PlannedModel> plan_models(const std::string& root, const std::string& catalog,
+                                      bool use_catalog, const GroupSelection& selection);
+
 /// Seed of a model's rendering, derived from the run's seed and "category/name".
 std::uint64_t model_seed(std::uint64_t seed, const std::string& category, const std::string& name);
 /// Seed of the descriptor of one view of a model.
@@ -139,6 +181,8 @@ struct TrainingOptions {
     /// scaled so their extent is typical_extent() of their category, and models get its group.
     std::string catalog;
     bool use_catalog = true;  ///< false: ignore any catalog (all models metric, group = name)
+    /// The models trained (plan_models); models of a database outside it stay as they are.
+    GroupSelection groups;
     /// Called on the calling thread once before the first model and after every model committed.
     /// It may throw to stop training: models committed so far stay, the exception propagates.
     std::function<void(const TrainingProgress&)> progress;

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The proving ground: recognition judged on generated table scenes of model groups that the
+# database does not hold. For each fold K of N, trains on the other folds' groups
+# (`esf train --other-folds K/N`), generates scenes of fold K's groups
+# (`esf generate-scenes --fold K/N`) and evaluates them end to end (`esf eval --scenes`); then
+# prints per scene type: objects, found as one cluster, found and named right, over all folds.
+#   bench/proving_ground.sh [BUILD_DIR] [SCENES_PER_FOLD] [FOLDS] [SEED]
+# Defaults: build, 100 scenes a fold, 3 folds (300 scenes), seed 1. Work files go to
+# $PROVING_GROUND_DIR (default: a new temporary folder, removed at the end).
+set -euo pipefail
+bench_name=proving_ground
+source "$(dirname "$0")/bench_env.sh"
+scenes="${2:-100}"
+folds="${3:-3}"
+seed="${4:-1}"
+require_tools "$esf"
+require_data "$data/meshes"
+work="${PROVING_GROUND_DIR:-}"
+if [[ -z "$work" ]]; then
+    work="$(mktemp -d)"
+    trap 'rm -rf "$work"' EXIT
+fi
+mkdir -p "$work"
+for ((k = 0; k < folds; k++)); do
+    echo "== fold $k/$folds: train on the other folds, $scenes scenes of this fold's groups" >&2
+    "$esf" train "$data/meshes" -o "$work/fold$k.sqlite" --other-folds "$k/$folds" --json \
+        > "$work/train$k.json"
+    "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k" -n "$scenes" --seed "$seed" \
+        --fold "$k/$folds" --json > "$work/generate$k.json"
+    "$esf" eval "$work/fold$k.sqlite" --scenes "$work/scenes$k/scenes.csv" --json \
+        > "$work/eval$k.json"
+done
+python3 - "$work" "$folds" <<'PY'
+import json, sys, collections
+work, folds = sys.argv[1], int(sys.argv[2])
+rows = collections.OrderedDict()
+classes = {}
+ms = []
+failures = 0
+for k in range(folds):
+    report = json.load(open(f"{work}/eval{k}.json"))
+    for t in report["types"]:
+        r = rows.setdefault(t["type"], collections.Counter())
+        for key in ("scenes", "objects", "found", "labelled", "correct"):
+            r[key] += t[key]
+    for o in report["objects"]:
+        c = classes.setdefault(o["class"], collections.Counter())
+        c["objects"] += 1
+        c["found"] += o["outcome"] == "found"
+        c["correct"] += bool(o["correct"])
+    ms.append(report["timings"]["segment_ms_per_frame"] + report["timings"]["recognize_ms_per_frame"])
+    failures += len(report["failures"])
+print("| scene type | scenes | objects | found as one cluster | named right (of labelled) |")
+print("|---|---|---|---|---|")
+order = [t for t in rows if t != "all"] + ["all"]
+for t in order:
+    r = rows[t]
+    found = 100.0 * r["found"] / max(r["objects"], 1)
+    right = 100.0 * r["correct"] / max(r["labelled"], 1)
+    print(f"| {t} | {r['scenes']} | {r['objects']} | {found:.1f} % | {right:.1f} % |")
+print("\n| class | objects | found | named right |")
+print("|---|---|---|---|")
+for name in sorted(classes, key=lambda n: -classes[n]["objects"]):
+    c = classes[name]
+    print(f"| {name} | {c['objects']} | {100.0 * c['found'] / c['objects']:.1f} % | "
+          f"{100.0 * c['correct'] / c['objects']:.1f} % |")
+print(f"\nscenes that failed to evaluate: {failures}")
+print(f"\nmean frame time (segment + recognise), per fold: " +
+      ", ".join(f"{m:.1f} ms" for m in ms))
+PY

@@ -1,0 +1,146 @@
+// Writing a folder of generated scenes and their truth (esf/evaluation/generated_scenes.hpp).
+
+#include "esf/evaluation/generated_scenes.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <utility>
+
+#include "atomic_file.hpp"
+#include "esf/cloud_io.hpp"
+#include "esf/error.hpp"
+#include "esf/mesh.hpp"
+#include "esf/parallel.hpp"
+
+namespace esf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string scene_file_name(std::size_t index) {
+    char name[32];
+    std::snprintf(name, sizeof name, "scene_%04zu.pcd", index);
+    return name;
+}
+
+// A CSV field, quoted when it holds a comma, a quote or a line break (RFC 4180).
+std::string csv_field(const std::string& text) {
+    if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+    std::string out = "\"";
+    for (const char c : text) {
+        if (c == '"') out += '"';
+        out += c;
+    }
+    return out + '"';
+}
+
+nlohmann::json row_major(const Eigen::Matrix4d& m) {
+    nlohmann::json out = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) out.push_back(m(r, c));
+    return out;
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+    detail::write_file_atomically(path, text.data(), text.size());
+}
+
+}  // namespace
+
+GeneratedSceneSet generate_scenes(const std::string& root, const std::string& output,
+                                  const SceneGenerationOptions& options) {
+    if (options.scenes == 0) throw std::invalid_argument("generate_scenes: no scenes asked for");
+    if (options.scenes > 100000)
+        throw std::invalid_argument("generate_scenes: at most 100000 scenes, got " +
+                                    std::to_string(options.scenes));
+    const int threads = resolve_threads(options.threads);
+    const std::vector<PlannedModel> plans =
+        plan_models(root, options.catalog, options.use_catalog, options.groups);
+
+    // Meshes in metres, loaded in parallel (each in the import helper).
+    std::vector<ClutterModel> models(plans.size());
+    parallel_for(plans.size(), threads, [&](std::size_t i) {
+        ClutterModel& m = models[i];
+        m.mesh = load_mesh(plans[i].file.path);
+        m.scale = plans[i].scale(m.mesh);
+        for (Eigen::Vector3f& v : m.mesh.vertices) v = (v.cast<double>() * m.scale).cast<float>();
+        m.category = plans[i].file.category;
+        m.file = plans[i].file.file;
+    });
+    const ClutterComposer composer(std::move(models), options.clutter);
+
+    std::error_code error;
+    fs::create_directories(output, error);
+    if (error || !fs::is_directory(output))
+        throw IoError(file_message(output, 0, "cannot create the output folder"));
+
+    GeneratedSceneSet result;
+    result.models = composer.models().size();
+    result.per_type.assign(clutter_types().size(), 0);
+    std::vector<std::vector<ClutterObject>> objects(options.scenes);
+    std::vector<nlohmann::json> truths(options.scenes);
+    std::mutex progress_mutex;
+    std::size_t done = 0;
+    parallel_for(options.scenes, threads, [&](std::size_t index) {
+        ClutterScene scene = composer.compose(index);
+        const std::string name = scene_file_name(index);
+        write_pcd((fs::path(output) / name).string(), scene.cloud, PcdEncoding::kBinaryCompressed);
+        nlohmann::json truth = {{"file", name},
+                                {"type", to_string(scene.type)},
+                                {"wall", scene.wall},
+                                {"table_edge", scene.table_edge},
+                                {"camera", row_major(scene.world_to_camera.matrix())}};
+        truth["objects"] = nlohmann::json::array();
+        for (const ClutterObject& o : scene.objects) {
+            const ClutterModel& m = composer.models()[o.model];
+            truth["objects"].push_back({{"object_id", o.object_id},
+                                        {"class", m.category},
+                                        {"model", m.file},
+                                        {"pose", row_major(o.pose)},
+                                        {"scale", m.scale},
+                                        {"visible", o.visible},
+                                        {"pixels", o.pixels},
+                                        {"labelled", o.labelled},
+                                        {"placement", o.placement},
+                                        {"type", to_string(scene.type)}});
+        }
+        truths[index] = std::move(truth);
+        objects[index] = std::move(scene.objects);
+        if (options.progress) {
+            const std::lock_guard<std::mutex> lock(progress_mutex);
+            options.progress(++done, options.scenes);
+        }
+    });
+
+    std::string csv = "scene_file,object_id,class,scene_type\n";
+    nlohmann::json truth = {{"seed", options.clutter.seed}, {"root", root}};
+    truth["scenes"] = nlohmann::json::array();
+    for (std::size_t index = 0; index < options.scenes; ++index) {
+        const ClutterType type = composer.type_of(index);
+        ++result.per_type[static_cast<std::size_t>(type)];
+        result.files.push_back((fs::path(output) / scene_file_name(index)).string());
+        for (const ClutterObject& o : objects[index]) {
+            ++result.objects;
+            if (!o.labelled) continue;
+            ++result.labelled;
+            csv += scene_file_name(index) + "," + std::to_string(o.object_id) + "," +
+                   csv_field(composer.models()[o.model].category) + "," + to_string(type) + "\n";
+        }
+        truth["scenes"].push_back(std::move(truths[index]));
+    }
+    const fs::path csv_path = fs::path(output) / "scenes.csv";
+    const fs::path truth_path = fs::path(output) / "truth.json";
+    write_text(csv_path, csv);
+    write_text(truth_path, truth.dump(1) + "\n");
+    result.files.push_back(csv_path.string());
+    result.files.push_back(truth_path.string());
+    return result;
+}
+
+}  // namespace esf

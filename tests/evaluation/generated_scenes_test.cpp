@@ -1,0 +1,167 @@
+// A generated scene folder: byte-identical at any thread count, a scene set that
+// read_scene_set takes and that matches the frames' labels, truth.json that names every object.
+
+#include "esf/evaluation/generated_scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "esf/cloud_io.hpp"
+#include "esf/mesh.hpp"
+#include "esf/scene_evaluation.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+esf::Mesh box_mesh(float sx, float sy, float sz) {
+    esf::Mesh mesh;
+    for (int i = 0; i < 8; ++i)
+        mesh.vertices.emplace_back(i & 1 ? sx : 0.0f, i & 2 ? sy : 0.0f, i & 4 ? sz : 0.0f);
+    const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& f : faces) {
+        mesh.triangles.emplace_back(f[0], f[1], f[2]);
+        mesh.triangles.emplace_back(f[0], f[2], f[3]);
+    }
+    return mesh;
+}
+
+std::string read_bytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+class GeneratedScenesTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        base_ = fs::temp_directory_path() /
+                ("esf_generated_" +
+                 std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(base_);
+        root_ = base_ / "meshes";
+        // Millimetre boxes (non-metric in the catalog, scaled to their category's size) and
+        // metric ones.
+        std::string rows = "file,category,source,model,group,extent,metric\n";
+        for (int i = 0; i < 6; ++i) {
+            const std::string category = i < 3 ? "box" : "block";
+            const std::string name = "m" + std::to_string(i);
+            fs::create_directories(root_ / category);
+            const bool mm = i == 1;
+            const float k = mm ? 1000.0f : 1.0f;
+            esf::write_ply_mesh(
+                (root_ / category / (name + ".ply")).string(),
+                box_mesh(k * (0.05f + 0.02f * static_cast<float>(i)), k * 0.06f, k * 0.1f));
+            rows += category + "/" + name + ".ply," + category + ",test," + name + ",g" +
+                    std::to_string(i) + "," + (mm ? "160" : "0.15") + "," + (mm ? "no" : "yes") +
+                    "\n";
+        }
+        std::ofstream(root_ / "catalog.csv") << rows;
+    }
+    void TearDown() override { fs::remove_all(base_); }
+
+    fs::path base_, root_;
+};
+
+TEST_F(GeneratedScenesTest, SameFilesAtAnyThreadCountAndTruthMatchesLabels) {
+    esf::SceneGenerationOptions options;
+    options.scenes = 7;
+    options.clutter.seed = 3;
+    options.threads = 1;
+    const esf::GeneratedSceneSet one =
+        esf::generate_scenes(root_.string(), (base_ / "a").string(), options);
+    options.threads = 2;
+    const esf::GeneratedSceneSet two =
+        esf::generate_scenes(root_.string(), (base_ / "b").string(), options);
+    ASSERT_EQ(one.files.size(), 7u + 2u);
+    EXPECT_EQ(one.models, 6u);
+    for (std::size_t t = 0; t < one.per_type.size(); ++t) EXPECT_EQ(one.per_type[t], 1u);
+    for (std::size_t i = 0; i < one.files.size(); ++i) {
+        const fs::path name = fs::path(one.files[i]).filename();
+        EXPECT_EQ(read_bytes(base_ / "a" / name), read_bytes(base_ / "b" / name)) << name;
+    }
+
+    const nlohmann::json truth = nlohmann::json::parse(read_bytes(base_ / "a" / "truth.json"));
+    ASSERT_EQ(truth["scenes"].size(), 7u);
+    const esf::SceneSet set = esf::read_scene_set((base_ / "a" / "scenes.csv").string());
+    std::size_t rows = 0;
+    for (const esf::LabelledScene& s : set.scenes) rows += s.objects.size();
+    EXPECT_EQ(rows, one.labelled);
+    EXPECT_GT(one.labelled, 7u);
+
+    for (const auto& scene : truth["scenes"]) {
+        const std::string file = scene["file"];
+        const esf::PointCloud cloud = esf::read_pcd((base_ / "a" / file).string());
+        ASSERT_EQ(cloud.width, 640u);
+        ASSERT_EQ(cloud.height, 480u);
+        std::map<std::uint32_t, std::size_t> pixels;
+        for (const std::uint32_t label : cloud.labels) ++pixels[label];
+        EXPECT_GT(pixels[1], 1000u) << file << ": the table";
+        std::set<std::uint32_t> labelled;
+        for (const auto& o : scene["objects"]) {
+            const std::uint32_t id = o["object_id"];
+            EXPECT_EQ(o["type"], scene["type"]);
+            EXPECT_TRUE(fs::exists(root_ / o["model"].get<std::string>()));
+            // The millimetre model is scaled to metres: its pose carries the scale.
+            const double scale = o["scale"];
+            const bool mm = o["model"] == "box/m1.ply";
+            EXPECT_NEAR(scale, mm ? 0.15 / 160.0 : 1.0, 1e-12);
+            Eigen::Matrix3d linear;
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) linear(r, c) = o["pose"][4 * r + c];
+            EXPECT_NEAR(linear.determinant(), scale * scale * scale, 1e-9);
+            if (o["labelled"]) {
+                labelled.insert(id);
+                EXPECT_EQ(pixels[10 * id], o["pixels"].get<std::size_t>());
+            } else {
+                EXPECT_EQ(pixels.count(10 * id), 0u);
+            }
+        }
+        for (const auto& s : set.scenes)
+            if (fs::path(s.file).filename() == file) {
+                std::set<std::uint32_t> listed;
+                for (const auto& o : s.objects) listed.insert(o.object_id);
+                EXPECT_EQ(listed, labelled) << file;
+                EXPECT_EQ(s.type, scene["type"].get<std::string>());
+            }
+    }
+}
+
+TEST_F(GeneratedScenesTest, FoldsKeepScenesAwayFromTheTrainingSide) {
+    esf::SceneGenerationOptions options;
+    options.scenes = 4;
+    options.groups.fold = 0;
+    options.groups.folds = 2;
+    const auto set = esf::generate_scenes(root_.string(), (base_ / "f").string(), options);
+    std::set<std::string> used;
+    const nlohmann::json truth = nlohmann::json::parse(read_bytes(base_ / "f" / "truth.json"));
+    for (const auto& scene : truth["scenes"])
+        for (const auto& o : scene["objects"]) used.insert(o["model"]);
+    esf::GroupSelection train = options.groups;
+    train.other_folds = true;
+    for (const auto& plan : esf::plan_models(root_.string(), "", true, train))
+        EXPECT_FALSE(used.count(plan.file.file)) << plan.file.file;
+    EXPECT_LT(set.models, 6u);
+}
+
+TEST_F(GeneratedScenesTest, RejectsBadRequests) {
+    esf::SceneGenerationOptions options;
+    options.scenes = 0;
+    EXPECT_THROW(esf::generate_scenes(root_.string(), (base_ / "x").string(), options),
+                 std::invalid_argument);
+    options.scenes = 1;
+    options.groups.only = {"none-such"};
+    EXPECT_THROW(esf::generate_scenes(root_.string(), (base_ / "x").string(), options),
+                 std::invalid_argument);
+}
+
+}  // namespace
