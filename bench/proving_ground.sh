@@ -6,7 +6,9 @@
 # prints per scene type: objects, found as one cluster, found and named right, over all folds.
 #   bench/proving_ground.sh [BUILD_DIR] [SCENES_PER_FOLD] [FOLDS] [SEED]
 # Defaults: build, 100 scenes a fold, 3 folds (300 scenes), seed 1. Work files go to
-# $PROVING_GROUND_DIR (default: a new temporary folder, removed at the end).
+# $PROVING_GROUND_DIR (default: a new temporary folder, removed at the end); scenes and databases
+# already there are reused. Extra `esf eval` options come from $PROVING_GROUND_EVAL (e.g.
+# "--verify $ESF_DATA/meshes"); {meshes} in it stands for the mesh folder.
 set -euo pipefail
 bench_name=proving_ground
 source "$(dirname "$0")/bench_env.sh"
@@ -21,14 +23,18 @@ if [[ -z "$work" ]]; then
     trap 'rm -rf "$work"' EXIT
 fi
 mkdir -p "$work"
+eval_args="${PROVING_GROUND_EVAL:-}"
 for ((k = 0; k < folds; k++)); do
     echo "== fold $k/$folds: train on the other folds, $scenes scenes of this fold's groups" >&2
-    "$esf" train "$data/meshes" -o "$work/fold$k.sqlite" --other-folds "$k/$folds" --json \
-        > "$work/train$k.json"
-    "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k" -n "$scenes" --seed "$seed" \
-        --fold "$k/$folds" --json > "$work/generate$k.json"
+    [[ -f "$work/train$k.json" ]] ||
+        "$esf" train "$data/meshes" -o "$work/fold$k.sqlite" --other-folds "$k/$folds" --json \
+            > "$work/train$k.json"
+    [[ -f "$work/generate$k.json" ]] ||
+        "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k" -n "$scenes" --seed "$seed" \
+            --fold "$k/$folds" --json > "$work/generate$k.json"
+    # shellcheck disable=SC2086
     "$esf" eval "$work/fold$k.sqlite" --scenes "$work/scenes$k/scenes.csv" --json \
-        > "$work/eval$k.json"
+        ${eval_args//\{meshes\}/$data/meshes} > "$work/eval$k.json"
 done
 python3 - "$work" "$folds" <<'PY'
 import json, sys, collections

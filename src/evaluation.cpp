@@ -304,11 +304,27 @@ EvaluationReport evaluate_test_set(const Recognizer& recognizer, const TestSet& 
                 index.search(std::span<const float>(d.signatures).subspan(s, dim), options.k);
             all.insert(all.end(), r.neighbours.begin(), r.neighbours.end());
         }
-        const std::vector<KnnNeighbour> nearest =
+        std::vector<KnnNeighbour> nearest =
             d.signatures.size() == dim
                 ? all
                 : detail::merge_signature_neighbours(std::move(all), options.k, index,
                                                      [](std::uint32_t) { return true; });
+        if (recognizer.verifies() && !nearest.empty()) {
+            // The best-fitting candidate first (Recognizer::verify), the others in order.
+            Classification c = classify_neighbours(nearest, labels);
+            try {
+                recognizer.verify(c, Observation{drop_non_finite(points).points, nullptr});
+            } catch (const std::exception& e) {
+                outcome.error = e.what();
+                progress.tick();
+                return;
+            }
+            const auto first =
+                std::find_if(nearest.begin(), nearest.end(), [&](const KnnNeighbour& candidate) {
+                    return candidate.view == c.neighbours.front().index;
+                });
+            if (first != nearest.end()) std::rotate(nearest.begin(), first, first + 1);
+        }
         match_s[w] = seconds_since(t);
         outcome.neighbours = outcome_neighbours(nearest, labels);
         progress.tick();

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <filesystem>
 #include <limits>
+#include <map>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -12,7 +15,9 @@
 #include "esf/descriptor_settings.hpp"
 #include "esf/error.hpp"
 #include "esf/knn_index.hpp"
+#include "esf/mesh.hpp"
 #include "esf/parallel.hpp"
+#include "esf/training.hpp"
 #include "neighbour_merge.hpp"
 #include "splitmix64.hpp"
 
@@ -128,6 +133,24 @@ struct Recognizer::Impl {
     std::unique_ptr<Describer> describer;
     std::unique_ptr<Classifier> classifier;
     std::size_t dimension = 0;
+    std::vector<ModelInfo> models;  // by model id (DescriptorMatrix::models)
+    // Verification: each model's sampled surface, loaded on first use.
+    mutable std::mutex surfaces_mutex;
+    mutable std::map<int, std::shared_ptr<const ModelSurface>> surfaces;
+
+    std::shared_ptr<const ModelSurface> surface(int model_id) const {
+        const std::lock_guard<std::mutex> lock(surfaces_mutex);
+        const auto it = surfaces.find(model_id);
+        if (it != surfaces.end()) return it->second;
+        const ModelInfo& m = models.at(static_cast<std::size_t>(model_id));
+        const std::string path =
+            (std::filesystem::path(options.verification_meshes) / m.file).string();
+        const Mesh mesh = load_mesh(path);
+        auto surface = std::make_shared<const ModelSurface>(sample_model_surface(
+            mesh, m.scale, options.verification.surface_points, model_seed(0, m.category, m.name)));
+        surfaces.emplace(model_id, surface);
+        return surface;
+    }
 };
 
 Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options)
@@ -137,6 +160,12 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
         throw std::invalid_argument("recognizer: query samplings must be >= 1, got " +
                                     std::to_string(options.query_samplings));
     resolve_threads(options.threads);
+    if (!options.verification_meshes.empty()) {
+        validate(options.verification);
+        if (!std::filesystem::is_directory(options.verification_meshes))
+            throw IoError(file_message(options.verification_meshes, 0,
+                                       "not a folder (verification needs the training meshes)"));
+    }
     impl_->options = options;
     auto fail = [&](const std::string& reason) {
         throw std::invalid_argument(file_message(path, 0, reason));
@@ -227,6 +256,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     impl_->info.rows = matrix.rows();
     impl_->info.models = matrix.models.size();
     impl_->info.categories = matrix.categories;
+    impl_->models = matrix.models;
     ClassifierOptions classifier_options;
     classifier_options.k = options.k;
     classifier_options.vote = options.vote;
@@ -315,14 +345,86 @@ std::vector<CloudClassification> Recognizer::classify_batch(
 Classification Recognizer::classify(std::span<const Eigen::Vector3f> points) const {
     const QueryDescriptor d = describe(points);
     if (!d.ok()) throw std::invalid_argument(d.error);
-    return classify_descriptor(d.signatures);
+    Classification c = classify_descriptor(d.signatures);
+    if (verifies()) {
+        const Points finite = drop_non_finite(points).points;
+        verify(c, Observation{finite, nullptr});
+    }
+    return c;
 }
 
 std::vector<CloudClassification> Recognizer::classify_batch(std::span<const Points> clouds) const {
-    return classify_batch(describe_batch(clouds));
+    std::vector<CloudClassification> out = classify_batch(describe_batch(clouds));
+    if (verifies())
+        parallel_for(out.size(), impl_->options.threads, [&](std::size_t i) {
+            if (!out[i].ok()) return;
+            const Points finite = drop_non_finite(clouds[i]).points;
+            verify(out[i].classification, Observation{finite, nullptr});
+        });
+    return out;
+}
+
+bool Recognizer::verifies() const { return !impl_->options.verification_meshes.empty(); }
+
+void Recognizer::verify(Classification& c, const Observation& observation) const {
+    if (!verifies() || c.neighbours.empty()) return;
+    const VerificationOptions& o = impl_->options.verification;
+    std::vector<std::size_t> picks;
+    std::vector<int> models;
+    for (std::size_t i = 0; i < c.neighbours.size() && picks.size() < o.candidates; ++i) {
+        if (!o.decide_class && c.neighbours[i].class_name != c.class_name) continue;
+        const int model = c.neighbours[i].model_id;
+        if (std::find(models.begin(), models.end(), model) != models.end()) continue;
+        models.push_back(model);
+        picks.push_back(i);
+    }
+    if (picks.empty()) return;
+    std::vector<PoseFit> fits;
+    for (const std::size_t i : picks) {
+        // A model the database rescaled (not metric in its catalog) has a guessed size.
+        const int model = c.neighbours[i].model_id;
+        const bool guessed = impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;
+        fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
+                                 observation, o, guessed));
+    }
+    std::size_t best = 0;
+    for (std::size_t j = 1; j < fits.size(); ++j)
+        if (fits[j].fit.score() > fits[best].fit.score()) best = j;
+
+    // The best fit first, the other neighbours in their order.
+    const std::size_t chosen = picks[best];
+    std::rotate(c.neighbours.begin(), c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen),
+                c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen) + 1);
+    const NeighbourView& n = c.neighbours.front();
+    c.class_name = n.class_name;
+    c.class_id = n.class_id;
+    c.best_model = n.model_name;
+    c.best_model_id = n.model_id;
+    c.best_view = n.view;
+    c.best_index = n.index;
+    c.best_distance = n.distance;
+    const double scale = impl_->models.at(static_cast<std::size_t>(n.model_id)).scale;
+    Eigen::Matrix4d scaled = fits[best].model_to_camera;
+    scaled.topLeftCorner<3, 3>() *= scale;
+    c.pose = scaled.cast<float>();
+    c.fit = fits[best].fit;
+    c.verified = fits[best].verified;
+    std::size_t same = 0;
+    for (const NeighbourView& v : c.neighbours) same += v.class_name == c.class_name;
+    c.confidence = static_cast<double>(same) / static_cast<double>(c.neighbours.size());
+    const auto vote = std::find_if(c.votes.begin(), c.votes.end(), [&](const ClassVote& v) {
+        return v.class_name == c.class_name;
+    });
+    if (vote != c.votes.end()) std::rotate(c.votes.begin(), vote, vote + 1);
 }
 
 SceneRecognition Recognizer::recognize(SegmentationResult segmentation) const {
+    SceneRecognition out = recognize_unverified(std::move(segmentation));
+    if (verifies()) verify_objects(out, nullptr);
+    return out;
+}
+
+SceneRecognition Recognizer::recognize_unverified(SegmentationResult segmentation) const {
     SceneRecognition out;
     out.plane_found = segmentation.plane_found;
     out.plane = segmentation.plane;
@@ -345,7 +447,23 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation) const {
 
 SceneRecognition Recognizer::recognize_scene(const PointCloud& scene,
                                              const SegmentationOptions& options) const {
-    return recognize(segment_scene(scene, options));
+    SceneRecognition out = recognize_unverified(segment_scene(scene, options));
+    if (verifies()) {
+        // The frame is the free-space witness when it is what the camera model describes.
+        const CameraIntrinsics& camera = impl_->options.verification.camera;
+        const bool framed = scene.width == static_cast<std::uint32_t>(camera.width) &&
+                            scene.height == static_cast<std::uint32_t>(camera.height);
+        verify_objects(out, framed ? &scene : nullptr);
+    }
+    return out;
+}
+
+void Recognizer::verify_objects(SceneRecognition& scene, const PointCloud* frame) const {
+    parallel_for(scene.objects.size(), impl_->options.threads, [&](std::size_t i) {
+        RecognizedObject& object = scene.objects[i];
+        if (!object.classified() || object.cluster.points.size() < 3) return;
+        verify(object.classification, Observation{object.cluster.points, frame});
+    });
 }
 
 }  // namespace esf

@@ -20,6 +20,21 @@ struct RecognizerArgs {
     std::string vote = "nearest";
 };
 
+/// --verify ROOT and --candidates N: hypothesis verification with the training meshes.
+inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
+    cmd.add_option("--verify", options.verification_meshes,
+                   "Verify: align the meshes of the nearest models (ROOT: the folder DB was "
+                   "trained from) to the points; the best fit names model and 6-DoF pose, with "
+                   "its fit (inliers, violations, RMS)")
+        ->check(CLI::ExistingDirectory);
+    cmd.add_option("--candidates", options.verification.candidates,
+                   "With --verify: distinct nearest models fitted (of the named class)")
+        ->check(CLI::Range(1, 50))
+        ->capture_default_str();
+    cmd.add_flag("--verify-class", options.verification.decide_class,
+                 "With --verify: candidates of any class; the best fit names the class");
+}
+
 /// DB positional, -k, --descriptor, --no-weights, --threads. `args` must outlive `cmd`.
 inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
     cmd.add_option("database", args.database, "Training database (esf train ... -o DB)")
@@ -49,6 +64,7 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
         ->transform(esf::cli::thread_limit())
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    add_verification_options(cmd, args.options);
 }
 
 inline RecognizerOptions recognizer_options(const RecognizerArgs& args) {
@@ -86,6 +102,12 @@ inline void add_classification_json(nlohmann::json& out, const Classification& c
     out["view"] = c.best_view;
     out["distance"] = c.best_distance;
     out["pose"] = pose_json(c.pose);
+    if (c.fit) {
+        out["fit"] = {{"inliers", c.fit->inliers},
+                      {"violations", c.fit->violations},
+                      {"rms_mm", c.fit->rms_mm}};
+        out["verified"] = c.verified;
+    }
     out["neighbours"] = neighbours_json(c);
 }
 

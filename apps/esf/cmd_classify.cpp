@@ -47,7 +47,19 @@ void run_classify(const ClassifyArgs& args) {
         if (slot == 0) progress.update(done.load());
     });
     progress.finish();
-    const std::vector<CloudClassification> results = recognizer.classify_batch(descriptors);
+    std::vector<CloudClassification> results = recognizer.classify_batch(descriptors);
+    if (recognizer.verifies()) {
+        // Verification needs the points again: read each classified file once more.
+        parallel_for(n, recognizer.options().threads, [&](std::size_t i) {
+            if (!results[i].ok()) return;
+            try {
+                const Points points = drop_non_finite(read_cloud(args.files[i]).points).points;
+                recognizer.verify(results[i].classification, Observation{points, nullptr});
+            } catch (const std::exception& e) {
+                results[i].error = e.what();
+            }
+        });
+    }
 
     int failed = 0;
     for (std::size_t i = 0; i < n; ++i)

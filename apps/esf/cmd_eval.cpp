@@ -42,6 +42,7 @@ struct EvalArgs {
     std::string report;
     int gallery = -1;
     std::string meshes;
+    RecognizerOptions verification;  // --verify, --candidates
     std::string title;
     bool json = false;
     std::string scenes;
@@ -61,6 +62,9 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.vote = parse_vote_rule(args.vote);
     options.query_samplings = args.samplings;
     options.threads = args.threads;
+    options.verification_meshes = args.verification.verification_meshes;
+    options.verification.candidates = args.verification.verification.candidates;
+    options.verification.decide_class = args.verification.verification.decide_class;
     return options;
 }
 
@@ -351,6 +355,7 @@ void add_eval_command(CLI::App& app) {
                     "With --report: the training root DB was trained from; the gallery draws "
                     "training views from its meshes")
         ->check(CLI::ExistingDirectory);
+    add_verification_options(*cmd, args->verification);
     cmd->add_option("--scenes", args->scenes,
                     "Evaluate segmentation and recognition on labelled scenes (CSV: scene_file, "
                     "object_id, class[, scene_type])")

@@ -20,11 +20,13 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "esf/knn_index.hpp"
+#include "esf/recognition/pose_verification.hpp"
 
 namespace esf {
 
@@ -87,6 +89,11 @@ struct Classification {
     Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();  ///< its pose
     std::vector<NeighbourView> neighbours;               ///< nearest first
     std::vector<ClassVote> votes;                        ///< every voted class, winner first
+    /// Set by verification (RecognizerOptions::verification_meshes): the chosen model's fit under
+    /// `pose`, which is then the model aligned to the points (mesh file -> camera, scale
+    /// included), not the training view's; the neighbours are reordered, best fit first.
+    std::optional<FitScore> fit;
+    bool verified = false;  ///< a candidate met the verification thresholds
 };
 
 /// Classifies by `rule` from `neighbours` (nearest first, as KnnIndex::search returns them)

@@ -57,6 +57,12 @@ struct RecognizerOptions {
     /// brings the query nearer its expected histogram. Costs one description per sampling.
     int query_samplings = 1;
     int threads = 0;  ///< building the index, describing and classifying batches; 0 = all cores
+    /// Non-empty: verify every classification (esf/recognition/pose_verification.hpp) with the
+    /// meshes of this folder, the root the database was trained from (each model's stored file
+    /// and scale); the best-fitting of the nearest `verification.candidates` models names the
+    /// class, model and pose. Meshes load once, on first use.
+    std::string verification_meshes;
+    VerificationOptions verification;
 };
 
 /// How query clouds are described: what the database's descriptors were made with.
@@ -177,6 +183,15 @@ class Recognizer {
     SceneRecognition recognize_scene(const PointCloud& scene,
                                      const SegmentationOptions& options = {}) const;
 
+    /// With verification_meshes: fits the first options.verification.candidates neighbours of
+    /// distinct models (of the named class unless verification.decide_class) to `observation`
+    /// and makes the best fit the classification's model, view and refined pose (fit, verified;
+    /// neighbours reordered best fit first; with decide_class also its class, the confidence
+    /// its share of the neighbours). Without: leaves `c` as it is. Throws esf::IoError naming a
+    /// mesh that cannot be loaded, std::invalid_argument for an observation fit_model refuses.
+    void verify(Classification& c, const Observation& observation) const;
+    bool verifies() const;  ///< verification_meshes is set
+
     const RecognizerInfo& info() const;
     const RecognizerOptions& options() const;
     /// The index and one label per view (class = category, model, view index, model -> camera
@@ -184,6 +199,9 @@ class Recognizer {
     const Classifier& classifier() const;
 
   private:
+    SceneRecognition recognize_unverified(SegmentationResult segmentation) const;
+    void verify_objects(SceneRecognition& scene, const PointCloud* frame) const;
+
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -557,7 +557,22 @@ PYBIND11_MODULE(_esf, m) {
         .def_readonly("distance", &Classification::best_distance)
         .def_property_readonly(
             "pose", [](const Classification& c) { return matrix_array(c.pose); },
-            "(4, 4) float32 model -> camera pose of the nearest view of the class")
+            "(4, 4) float32 model -> camera pose: of the nearest view of the class, or with "
+            "verification the model aligned to the points (scale included)")
+        .def_property_readonly(
+            "fit",
+            [](const Classification& c) -> std::optional<py::dict> {
+                if (!c.fit) return std::nullopt;
+                py::dict d;
+                d["inliers"] = c.fit->inliers;
+                d["support"] = c.fit->support;
+                d["violations"] = c.fit->violations;
+                d["rms_mm"] = c.fit->rms_mm;
+                return d;
+            },
+            "with verification: {'inliers', 'support', 'violations', 'rms_mm'}; else None")
+        .def_readonly("verified", &Classification::verified,
+                      "with verification: the fit met the thresholds")
         .def_readonly("neighbours", &Classification::neighbours, "nearest first")
         .def("__repr__", &classification_repr);
 
@@ -602,8 +617,9 @@ PYBIND11_MODULE(_esf, m) {
                            "and thread-safe: its methods release the GIL.")
         .def(py::init([](const fs::path& database, std::size_t k, const std::string& descriptor,
                          bool use_weights, int samplings, const std::string& vote, bool every_view,
-                         int threads) {
+                         int threads, const std::optional<fs::path>& verify) {
                  RecognizerOptions options;
+                 if (verify) options.verification_meshes = verify->string();
                  options.k = k;
                  options.descriptor = descriptor;
                  options.use_weights = use_weights;
@@ -618,13 +634,16 @@ PYBIND11_MODULE(_esf, m) {
              }),
              py::arg("database"), py::kw_only(), py::arg("k") = 10, py::arg("descriptor") = "",
              py::arg("use_weights") = true, py::arg("samplings") = 1, py::arg("vote") = "nearest",
-             py::arg("every_view") = false, py::arg("threads") = 0,
+             py::arg("every_view") = false, py::arg("threads") = 0, py::arg("verify") = py::none(),
              "Opens DATABASE (esf train ... -o DATABASE): the ``k`` nearest models (each by its "
              "nearest view; ``every_view``: the k nearest views) are the neighbours; ``vote`` "
              "'nearest' names the nearest one's class (the others give the confidence), "
              "'majority' the most frequent; ``descriptor`` picks the kind when it holds several; "
              "``use_weights`` applies its learned weights; ``samplings`` describes a query that "
-             "many times and averages; ``threads`` 0 = all cores. Raises FileNotFoundError / "
+             "many times and averages; ``threads`` 0 = all cores; ``verify``: the folder of meshes "
+             "DATABASE was trained from, to align the nearest models to each object (then "
+             "``Classification.pose`` is the fitted pose and ``.fit`` its score). Raises "
+             "FileNotFoundError / "
              "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")
         .def("classify", &classify_py, py::arg("points"), py::arg("k") = py::none(),

@@ -1,0 +1,99 @@
+#pragma once
+// Hypothesis verification: a candidate model aligned to the points the sensor saw, and scored.
+//
+//   start   the matched training view's rotation, turned towards the object's direction from the
+//           camera, the model's visible surface centred on the object's points
+//   align   point-to-plane ICP (the model's normals) of the model's camera-facing surface samples
+//           to their nearest object points (a k-d tree, nanoflann), correspondences within a
+//           radius shrinking from 3 to 1 cm
+//   score   inliers: share of the object's points within `inlier_distance` of the posed surface;
+//           support: share of the posed model's visible surface (not hidden by nearer returns)
+//           with object points on it;
+//           violations: share of the posed visible surface where the sensor sees free space:
+//           with the frame, a return farther than the model by `violation_margin` at the pixel a
+//           model point projects to; without a frame (a lone cloud), a pixel outside the object's
+//           own outline (its points projected with the camera, 2 pixels of slack)
+//
+// A hypothesis is verified when inliers >= min_inliers and violations <= max_violations. The
+// same inputs give the same result on any thread.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "esf/camera.hpp"
+#include "esf/mesh.hpp"
+#include "esf/point_cloud.hpp"
+
+namespace esf {
+
+/// A model's surface, sampled evenly by area: points and outward normals in metres, model frame
+/// (the mesh file's coordinates times `scale`).
+struct ModelSurface {
+    Points points;
+    Points normals;
+    double scale = 1.0;     ///< file units -> metres
+    double diameter = 0.0;  ///< metres: twice the bounding radius
+};
+
+/// Samples `count` points (area-weighted triangles, uniform within each; seeded). Normals follow
+/// the triangles' winding; when most of them point towards the bounding box centre (a mesh wound
+/// clockwise), all are turned round. Throws std::invalid_argument for a bad mesh (check_mesh), a
+/// mesh without area, count 0 or a scale that is not positive and finite.
+ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t count,
+                                  std::uint64_t seed);
+
+struct FitScore {
+    double inliers = 0.0;     ///< share of the object's points explained, [0, 1]
+    double violations = 0.0;  ///< share of the visible model surface in seen free space, [0, 1]
+    double support = 0.0;     ///< share of the visible, unhidden model surface on object points
+    double rms_mm = 0.0;      ///< RMS distance of the inlier points, millimetres
+    /// Agreement both ways, less what the sensor saw through.
+    double score() const { return 0.5 * (inliers + support) - violations; }
+};
+
+struct VerificationOptions {
+    std::size_t candidates = 3;        ///< distinct models tried, nearest first (>= 1)
+    /// false: the candidates are models of the class the neighbours named, and verification
+    /// picks the model and pose; true: models of any class, and the best fit names the class too
+    /// (see BENCHMARKS.md for what each does to accuracy).
+    bool decide_class = false;
+    int iterations = 10;               ///< ICP iterations (>= 1)
+    std::size_t surface_points = 2000; ///< samples of each model's surface
+    double inlier_distance = 0.004;    ///< metres
+    double violation_margin = 0.015;   ///< metres
+    double min_inliers = 0.5;
+    double max_violations = 0.25;
+    CameraIntrinsics camera = CameraIntrinsics::kinect();  ///< for lone clouds (no frame)
+};
+
+/// Throws std::invalid_argument naming the option that is out of range.
+void validate(const VerificationOptions& options);
+
+/// What the model is checked against: the object's finite points and, when known, the organised
+/// frame they were segmented from (camera coordinates, the frame's intrinsics in `camera`).
+struct Observation {
+    std::span<const Eigen::Vector3f> points;
+    const PointCloud* frame = nullptr;
+};
+
+struct PoseFit {
+    /// Model (metres, ModelSurface frame) -> camera: a rigid motion, times `scale` where the
+    /// scale was free.
+    Eigen::Matrix4d model_to_camera = Eigen::Matrix4d::Identity();
+    double scale = 1.0;  ///< found for the model (1 when not free), in [0.8, 1.25]
+    FitScore fit;
+    bool verified = false;
+};
+
+/// Aligns `surface` to the observation from the rotation of `view_pose` (model -> the training
+/// camera; its scale, if any, is removed) and scores the result. With `free_scale` (a model whose
+/// size is a guess: not metric in the catalog), the model's size is fitted too. Throws std::invalid_argument for
+/// fewer than 3 observed points, a frame that is not organised or not of the camera's size,
+/// bad options or a non-finite pose.
+PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
+                  const Observation& observation, const VerificationOptions& options,
+                  bool free_scale = false);
+
+}  // namespace esf

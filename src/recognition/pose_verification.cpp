@@ -1,0 +1,419 @@
+// Hypothesis verification (esf/recognition/pose_verification.hpp): ICP of a model's visible
+// surface to an object's points, and the fit's score against the frame.
+
+#include "esf/recognition/pose_verification.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <memory>
+#include <nanoflann.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "splitmix64.hpp"
+
+namespace esf {
+
+namespace {
+
+// nanoflann's view of a point list.
+struct PointsAdaptor {
+    const Points* points;
+    std::size_t kdtree_get_point_count() const { return points->size(); }
+    float kdtree_get_pt(std::size_t i, std::size_t dim) const { return (*points)[i][static_cast<Eigen::Index>(dim)]; }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const {
+        return false;
+    }
+};
+
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
+                                                   PointsAdaptor, 3, std::size_t>;
+
+class NearestPoints {
+  public:
+    explicit NearestPoints(Points points)
+        : points_(std::move(points)),
+          adaptor_{&points_},
+          tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {
+        tree_.buildIndex();
+    }
+    // Index of the nearest point and the squared distance.
+    std::size_t nearest(const Eigen::Vector3f& q, float& squared) const {
+        std::size_t index = 0;
+        tree_.knnSearch(q.data(), 1, &index, &squared);
+        return index;
+    }
+    const Points& points() const { return points_; }
+
+  private:
+    Points points_;
+    PointsAdaptor adaptor_;
+    KdTree tree_;
+};
+
+// At most `limit` of `points`, evenly strided (deterministic).
+Points stride_sample(std::span<const Eigen::Vector3f> points, std::size_t limit) {
+    Points out;
+    if (points.size() <= limit) {
+        out.assign(points.begin(), points.end());
+        return out;
+    }
+    out.reserve(limit);
+    for (std::size_t i = 0; i < limit; ++i) out.push_back(points[i * points.size() / limit]);
+    return out;
+}
+
+// The rotation that turns the camera's optical axis (0, 0, 1) towards `direction`.
+Eigen::Matrix3d towards(const Eigen::Vector3d& direction) {
+    return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), direction.normalized())
+        .toRotationMatrix();
+}
+
+Eigen::Matrix4d exp_se3(const Eigen::Matrix<double, 6, 1>& x) {
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    const Eigen::Vector3d w = x.head<3>();
+    const double angle = w.norm();
+    if (angle > 1e-12) m.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+    m.topRightCorner<3, 1>() = x.tail<3>();
+    return m;
+}
+
+// Where the sensor looked: the frame's depth per pixel, or the object's own outline.
+class SeenSpace {
+  public:
+    SeenSpace(const Observation& o, const CameraIntrinsics& camera) : camera_(camera) {
+        width_ = static_cast<std::size_t>(camera.width);
+        height_ = static_cast<std::size_t>(camera.height);
+        frame_ = o.frame;
+        if (frame_ != nullptr) return;
+        // The outline: pixels the object's points fall on, grown by kSlack pixels.
+        outline_.assign(width_ * height_, 0);
+        for (const Eigen::Vector3f& p : o.points) {
+            long u = 0, v = 0;
+            if (!project(p.cast<double>(), u, v)) continue;
+            for (long dv = -kSlack; dv <= kSlack; ++dv)
+                for (long du = -kSlack; du <= kSlack; ++du) {
+                    const long uu = u + du, vv = v + dv;
+                    if (uu >= 0 && vv >= 0 && uu < static_cast<long>(width_) &&
+                        vv < static_cast<long>(height_))
+                        outline_[static_cast<std::size_t>(vv) * width_ + static_cast<std::size_t>(uu)] = 1;
+                }
+        }
+    }
+
+    // Whether something nearer than the point (by `margin`) hides it in the frame.
+    bool hidden(const Eigen::Vector3d& p, double margin) const {
+        if (frame_ == nullptr) return false;
+        long u = 0, v = 0;
+        if (!project(p, u, v)) return true;
+        const Eigen::Vector3f& seen = frame_->points[static_cast<std::size_t>(v) * width_ +
+                                                     static_cast<std::size_t>(u)];
+        return !std::isfinite(seen.z()) || static_cast<double>(seen.z()) < p.z() - margin;
+    }
+
+    // 1: the sensor saw through the point; 0: consistent or hidden; -1: unknown.
+    int violates(const Eigen::Vector3d& p, double margin) const {
+        long u = 0, v = 0;
+        if (!project(p, u, v)) return -1;
+        const std::size_t pixel = static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u);
+        if (frame_ == nullptr) return outline_[pixel] ? 0 : 1;
+        const Eigen::Vector3f& seen = frame_->points[pixel];
+        if (!std::isfinite(seen.z())) return -1;
+        return static_cast<double>(seen.z()) > p.z() + margin ? 1 : 0;
+    }
+
+  private:
+    static constexpr long kSlack = 2;
+
+    bool project(const Eigen::Vector3d& p, long& u, long& v) const {
+        if (!(p.z() > 1e-6)) return false;
+        u = std::lround(camera_.fx * p.x() / p.z() + camera_.cx);
+        v = std::lround(camera_.fy * p.y() / p.z() + camera_.cy);
+        return u >= 0 && v >= 0 && u < static_cast<long>(width_) && v < static_cast<long>(height_);
+    }
+
+    CameraIntrinsics camera_;
+    std::size_t width_ = 0, height_ = 0;
+    const PointCloud* frame_ = nullptr;
+    std::vector<unsigned char> outline_;
+};
+
+constexpr std::size_t kIcpSamples = 200;      // visible surface samples per ICP iteration
+constexpr std::size_t kObjectSamples = 1000;  // object points in the k-d tree and the score
+constexpr double kPointWeight = 0.1;          // of the point-to-point term in ICP
+constexpr double kMinScale = 0.8;             // bounds of a free scale, relative to the model's
+constexpr double kMaxScale = 1.25;
+
+}  // namespace
+
+void validate(const VerificationOptions& o) {
+    const auto fail = [](const std::string& what) {
+        throw std::invalid_argument("verification: " + what);
+    };
+    if (o.candidates < 1) fail("candidates must be >= 1");
+    if (o.iterations < 1 || o.iterations > 1000) fail("iterations must be in [1, 1000]");
+    if (o.surface_points < 100 || o.surface_points > 1000000)
+        fail("surface points must be in [100, 1000000]");
+    if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
+        fail("inlier distance must be in (0, 1) m");
+    if (!(o.violation_margin > 0.0 && o.violation_margin < 1.0))
+        fail("violation margin must be in (0, 1) m");
+    if (!(o.min_inliers >= 0.0 && o.min_inliers <= 1.0)) fail("min inliers must be in [0, 1]");
+    if (!(o.max_violations >= 0.0 && o.max_violations <= 1.0))
+        fail("max violations must be in [0, 1]");
+    o.camera.validate();
+}
+
+ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t count,
+                                  std::uint64_t seed) {
+    check_mesh(mesh, "model surface");
+    if (count == 0) throw std::invalid_argument("model surface: no samples asked for");
+    if (!(scale > 0.0) || !std::isfinite(scale))
+        throw std::invalid_argument("model surface: scale must be positive and finite");
+    std::vector<double> cumulative(mesh.triangles.size());
+    double total = 0.0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const Eigen::Vector3i& f = mesh.triangles[t];
+        const Eigen::Vector3d a = mesh.vertices[static_cast<std::size_t>(f[0])].cast<double>();
+        const Eigen::Vector3d b = mesh.vertices[static_cast<std::size_t>(f[1])].cast<double>();
+        const Eigen::Vector3d c = mesh.vertices[static_cast<std::size_t>(f[2])].cast<double>();
+        total += 0.5 * (b - a).cross(c - a).norm();
+        cumulative[t] = total;
+    }
+    if (!(total > 0.0)) throw std::invalid_argument("model surface: the mesh has no area");
+
+    ModelSurface surface;
+    surface.scale = scale;
+    surface.diameter = 2.0 * mesh.bounding_radius() * scale;
+    const Eigen::Vector3d centre = (0.5 * (mesh.min_corner() + mesh.max_corner())).cast<double>();
+    detail::SplitMix64 random(seed);
+    const auto uniform = [&] { return static_cast<double>(random.next() >> 11) * 0x1.0p-53; };
+    std::size_t inward = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        // Stratified along the cumulative area: evenly spread, still random.
+        const double target = (static_cast<double>(i) + uniform()) / static_cast<double>(count) * total;
+        const std::size_t t = static_cast<std::size_t>(
+            std::lower_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin());
+        const Eigen::Vector3i& f = mesh.triangles[std::min(t, mesh.triangles.size() - 1)];
+        const Eigen::Vector3d a = mesh.vertices[static_cast<std::size_t>(f[0])].cast<double>();
+        const Eigen::Vector3d b = mesh.vertices[static_cast<std::size_t>(f[1])].cast<double>();
+        const Eigen::Vector3d c = mesh.vertices[static_cast<std::size_t>(f[2])].cast<double>();
+        double r1 = uniform(), r2 = uniform();
+        if (r1 + r2 > 1.0) {
+            r1 = 1.0 - r1;
+            r2 = 1.0 - r2;
+        }
+        const Eigen::Vector3d p = a + r1 * (b - a) + r2 * (c - a);
+        Eigen::Vector3d n = (b - a).cross(c - a);
+        n = n.norm() > 0.0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ();
+        inward += n.dot(p - centre) < 0.0;
+        surface.points.push_back((p * scale).cast<float>());
+        surface.normals.push_back(n.cast<float>());
+    }
+    if (2 * inward > count)
+        for (Eigen::Vector3f& n : surface.normals) n = -n;
+    return surface;
+}
+
+PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
+                  const Observation& observation, const VerificationOptions& options,
+                  bool free_scale) {
+    validate(options);
+    if (observation.points.size() < 3)
+        throw std::invalid_argument("verification: needs at least 3 object points, got " +
+                                    std::to_string(observation.points.size()));
+    if (!view_pose.allFinite()) throw std::invalid_argument("verification: pose is not finite");
+    if (observation.frame != nullptr &&
+        (observation.frame->width != static_cast<std::uint32_t>(options.camera.width) ||
+         observation.frame->height != static_cast<std::uint32_t>(options.camera.height) ||
+         observation.frame->points.size() !=
+             static_cast<std::size_t>(options.camera.width) * static_cast<std::size_t>(options.camera.height)))
+        throw std::invalid_argument("verification: the frame is not an organised " +
+                                    std::to_string(options.camera.width) + "x" +
+                                    std::to_string(options.camera.height) + " cloud");
+    if (surface.points.empty() || surface.points.size() != surface.normals.size())
+        throw std::invalid_argument("verification: empty model surface");
+
+    const NearestPoints object(stride_sample(observation.points, kObjectSamples));
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3f& p : object.points()) centroid += p.cast<double>();
+    centroid /= static_cast<double>(object.points().size());
+
+    // Start: the view's rotation (scale removed), turned towards the object, centred on it.
+    Eigen::Matrix3d rotation = view_pose.topLeftCorner<3, 3>();
+    const double view_scale = std::cbrt(std::abs(rotation.determinant()));
+    if (!(view_scale > 0.0)) throw std::invalid_argument("verification: singular view pose");
+    rotation /= view_scale;
+    rotation = towards(centroid) * rotation;
+    Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+    pose.topLeftCorner<3, 3>() = rotation;
+    {
+        Eigen::Vector3d visible = Eigen::Vector3d::Zero();
+        std::size_t count = 0;
+        const Eigen::Vector3d ray = centroid.normalized();
+        for (std::size_t i = 0; i < surface.points.size(); ++i)
+            if ((rotation * surface.normals[i].cast<double>()).dot(ray) < 0.0) {
+                visible += rotation * surface.points[i].cast<double>();
+                ++count;
+            }
+        if (count == 0) {
+            for (const Eigen::Vector3f& p : surface.points) visible += rotation * p.cast<double>();
+            count = surface.points.size();
+        }
+        pose.topRightCorner<3, 1>() = centroid - visible / static_cast<double>(count);
+    }
+
+    // The model's samples that face the camera under `pose`.
+    const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / (4 * kIcpSamples));
+    const auto visible_samples = [&](const Eigen::Matrix4d& m, std::size_t step,
+                                     std::vector<Eigen::Vector3d>& points,
+                                     std::vector<Eigen::Vector3d>& normals) {
+        points.clear();
+        normals.clear();
+        const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+        const Eigen::Vector3d t = m.topRightCorner<3, 1>();
+        for (std::size_t i = 0; i < surface.points.size(); i += step) {
+            const Eigen::Vector3d p = r * surface.points[i].cast<double>() + t;
+            const Eigen::Vector3d n = (r * surface.normals[i].cast<double>()).normalized();
+            if (n.dot(p) < 0.0) {
+                points.push_back(p);
+                normals.push_back(n);
+            }
+        }
+    };
+
+    std::vector<Eigen::Vector3d> points, normals;
+    double scale = 1.0;  // relative to the surface's
+    for (int iteration = 0; iteration < options.iterations; ++iteration) {
+        const double radius =
+            options.iterations > 1
+                ? 0.03 + (0.01 - 0.03) * iteration / static_cast<double>(options.iterations - 1)
+                : 0.02;
+        visible_samples(pose, stride, points, normals);
+        // Linearised about the samples' centre, so that rotation and translation separate;
+        // point-to-plane with a little point-to-point, so that directions the normals leave
+        // free (along a cylinder's axis) stay put.
+        Eigen::Vector3d pivot = Eigen::Vector3d::Zero();
+        for (const Eigen::Vector3d& p : points) pivot += p;
+        if (!points.empty()) pivot /= static_cast<double>(points.size());
+        // Unknowns: rotation (3), translation (3), and a scale change where the scale is free.
+        Eigen::Matrix<double, 7, 7> ata = Eigen::Matrix<double, 7, 7>::Zero();
+        Eigen::Matrix<double, 7, 1> atb = Eigen::Matrix<double, 7, 1>::Zero();
+        std::size_t pairs = 0;
+        const std::size_t step = std::max<std::size_t>(1, points.size() / kIcpSamples);
+        for (std::size_t i = 0; i < points.size(); i += step) {
+            float squared = 0.0f;
+            const std::size_t q = object.nearest(points[i].cast<float>(), squared);
+            if (static_cast<double>(squared) > radius * radius) continue;
+            const Eigen::Vector3d target = object.points()[q].cast<double>();
+            const Eigen::Vector3d arm = points[i] - pivot;
+            Eigen::Matrix<double, 7, 1> row;
+            row.head<3>() = arm.cross(normals[i]);
+            row.segment<3>(3) = normals[i];
+            row(6) = arm.dot(normals[i]);
+            const double b = (target - points[i]).dot(normals[i]);
+            ata += row * row.transpose();
+            atb += row * b;
+            Eigen::Matrix<double, 3, 7> rows;
+            rows.leftCols<3>() << 0.0, arm.z(), -arm.y(), -arm.z(), 0.0, arm.x(), arm.y(),
+                -arm.x(), 0.0;
+            rows.middleCols<3>(3).setIdentity();
+            rows.col(6) = arm;
+            ata += kPointWeight * rows.transpose() * rows;
+            atb += kPointWeight * rows.transpose() * (target - points[i]);
+            ++pairs;
+        }
+        if (pairs < 7) break;
+        Eigen::Matrix<double, 7, 1> x = Eigen::Matrix<double, 7, 1>::Zero();
+        if (free_scale) {
+            x = ata.ldlt().solve(atb);
+        } else {
+            x.head<6>() = ata.topLeftCorner<6, 6>().ldlt().solve(atb.head<6>());
+        }
+        if (!x.allFinite()) break;
+        const double next_scale = std::clamp(scale * (1.0 + x(6)), kMinScale, kMaxScale);
+        // p -> (1 + ds) R (p - pivot) + pivot + t
+        Eigen::Matrix4d to_pivot = Eigen::Matrix4d::Identity(), back = Eigen::Matrix4d::Identity();
+        to_pivot.topRightCorner<3, 1>() = -pivot;
+        back.topRightCorner<3, 1>() = pivot;
+        Eigen::Matrix4d step_pose = exp_se3(x.head<6>());
+        step_pose.topLeftCorner<3, 3>() *= next_scale / scale;
+        scale = next_scale;
+        pose = back * step_pose * to_pivot * pose;
+        if (x.head<3>().norm() < 1e-5 && x.segment<3>(3).norm() < 1e-5 && std::abs(x(6)) < 1e-5)
+            break;
+    }
+
+    // Score under the final pose.
+    PoseFit out;
+    out.model_to_camera = pose;
+    out.scale = scale;
+    visible_samples(pose, 1, points, normals);
+    std::vector<Eigen::Vector3d> all_normals;
+    {
+        const Eigen::Matrix3d r = pose.topLeftCorner<3, 3>();
+        const Eigen::Vector3d t = pose.topRightCorner<3, 1>();
+        Points posed;
+        posed.reserve(surface.points.size());
+        for (std::size_t i = 0; i < surface.points.size(); ++i) {
+            posed.push_back((r * surface.points[i].cast<double>() + t).cast<float>());
+            all_normals.push_back((r * surface.normals[i].cast<double>()).normalized());
+        }
+        const NearestPoints model(std::move(posed));
+        // A sample stands for a patch of about this radius.
+        const double spacing =
+            surface.diameter / std::sqrt(static_cast<double>(surface.points.size())) * 1.5;
+        std::size_t inliers = 0;
+        double squared_sum = 0.0;
+        for (const Eigen::Vector3f& q : object.points()) {
+            float squared = 0.0f;
+            const std::size_t m = model.nearest(q, squared);
+            const Eigen::Vector3d d = (q - model.points()[m]).cast<double>();
+            const double along = std::abs(d.dot(all_normals[m]));
+            if (std::sqrt(static_cast<double>(squared)) < spacing + options.inlier_distance &&
+                along < options.inlier_distance) {
+                ++inliers;
+                squared_sum += along * along;
+            }
+        }
+        out.fit.inliers =
+            static_cast<double>(inliers) / static_cast<double>(object.points().size());
+        out.fit.rms_mm = inliers ? 1000.0 * std::sqrt(squared_sum / static_cast<double>(inliers)) : 0.0;
+    }
+    // Violations, and support: the share of the visible surface (not hidden by something
+    // nearer) that has an object point on it.
+    const SeenSpace seen(observation, options.camera);
+    std::size_t decided = 0, violations = 0, exposed = 0, supported = 0;
+    const double object_spacing = 0.01;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Eigen::Vector3d& p = points[i];
+        const int v = seen.violates(p, options.violation_margin);
+        if (v >= 0) {
+            ++decided;
+            violations += static_cast<std::size_t>(v);
+        }
+        if (seen.hidden(p, options.violation_margin)) continue;
+        ++exposed;
+        float squared = 0.0f;
+        const std::size_t q = object.nearest(p.cast<float>(), squared);
+        const Eigen::Vector3d d = object.points()[q].cast<double>() - p;
+        if (std::sqrt(static_cast<double>(squared)) < object_spacing + options.inlier_distance &&
+            std::abs(d.dot(normals[i])) < options.inlier_distance)
+            ++supported;
+    }
+    out.fit.violations =
+        decided ? static_cast<double>(violations) / static_cast<double>(decided) : 0.0;
+    out.fit.support = exposed ? static_cast<double>(supported) / static_cast<double>(exposed) : 0.0;
+    out.verified = out.fit.inliers >= options.min_inliers &&
+                   out.fit.violations <= options.max_violations;
+    return out;
+}
+
+}  // namespace esf
