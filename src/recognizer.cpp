@@ -447,7 +447,12 @@ SceneRecognition Recognizer::recognize_unverified(SegmentationResult segmentatio
 
 SceneRecognition Recognizer::recognize_scene(const PointCloud& scene,
                                              const SegmentationOptions& options) const {
-    SceneRecognition out = recognize_unverified(segment_scene(scene, options));
+    return recognize(segment_scene(scene, options), scene);
+}
+
+SceneRecognition Recognizer::recognize(SegmentationResult segmentation,
+                                       const PointCloud& scene) const {
+    SceneRecognition out = recognize_unverified(std::move(segmentation));
     if (verifies()) {
         // The frame is the free-space witness when it is what the camera model describes.
         const CameraIntrinsics& camera = impl_->options.verification.camera;

@@ -4,12 +4,19 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "csv.hpp"
 #include "esf/cloud_io.hpp"
 #include "esf/error.hpp"
+#include "esf/evaluation/pose_accuracy.hpp"
+#include "esf/mesh.hpp"
+#include "esf/recognition/pose_verification.hpp"
 
 namespace esf {
 
@@ -30,6 +37,74 @@ double ratio(std::size_t a, std::size_t b) {
 
 double SceneTypeSummary::found_rate() const { return ratio(found, objects); }
 double SceneTypeSummary::end_to_end() const { return ratio(correct, labelled); }
+double SceneTypeSummary::pose_rate() const { return ratio(pose_correct, posed); }
+
+namespace {
+
+// truth.json of a generated scene set: each object's model and pose, by (file name, object id).
+struct TruthObject {
+    std::string model;  // relative to the root
+    std::string class_name;
+    Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+    double visible = 0.0;
+};
+
+struct SceneTruth {
+    std::string root;
+    std::map<std::pair<std::string, std::uint32_t>, TruthObject> objects;
+};
+
+std::optional<SceneTruth> read_truth(const std::string& scene_set) {
+    const fs::path path = fs::path(scene_set).parent_path() / "truth.json";
+    if (!fs::is_regular_file(path)) return std::nullopt;
+    std::ifstream in(path);
+    nlohmann::json j;
+    try {
+        in >> j;
+        SceneTruth truth;
+        truth.root = j.at("root").get<std::string>();
+        for (const auto& scene : j.at("scenes"))
+            for (const auto& o : scene.at("objects")) {
+                TruthObject t;
+                t.model = o.at("model").get<std::string>();
+                t.class_name = o.at("class").get<std::string>();
+                t.visible = o.at("visible").get<double>();
+                const auto& m = o.at("pose");
+                if (m.size() != 16)
+                    throw std::invalid_argument("a pose of " + std::to_string(m.size()) +
+                                                " numbers");
+                for (int k = 0; k < 16; ++k)
+                    t.pose(k / 4, k % 4) = m.at(static_cast<std::size_t>(k)).get<double>();
+                truth.objects[{scene.at("file").get<std::string>(),
+                               o.at("object_id").get<std::uint32_t>()}] = t;
+            }
+        return truth;
+    } catch (const std::exception& e) {
+        throw IoError(
+            file_message(path.string(), 0, std::string("not a scene truth file: ") + e.what()));
+    }
+}
+
+// Points on each true model's surface (mesh file coordinates), loaded once.
+class ModelPoints {
+  public:
+    explicit ModelPoints(std::string root) : root_(std::move(root)) {}
+    const Points& of(const std::string& model) {
+        auto it = points_.find(model);
+        if (it == points_.end()) {
+            const Mesh mesh = load_mesh((fs::path(root_) / model).string());
+            it = points_.emplace(model, sample_model_surface(mesh, 1.0, kPoints, 0).points).first;
+        }
+        return it->second;
+    }
+
+  private:
+    static constexpr std::size_t kPoints = 400;
+    std::string root_;
+    std::map<std::string, Points> points_;
+};
+
+}  // namespace
 
 SceneSet read_scene_set(std::istream& in, const std::string& path) {
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -110,6 +185,29 @@ SceneSet read_scene_set(const std::string& csv) {
     return read_scene_set(in, csv);
 }
 
+namespace {
+
+// ADD-S of a found object whose model the database holds, at least half visible.
+void judge_pose(const SceneTruth& truth, ModelPoints& points,
+                const std::set<std::pair<std::string, std::string>>& held,
+                SceneObjectOutcome& outcome) {
+    const auto it = truth.objects.find(
+        {fs::path(outcome.scene).filename().string(), outcome.segmentation.object_id});
+    if (it == truth.objects.end()) return;
+    const TruthObject& t = it->second;
+    const std::string name = fs::path(t.model).stem().string();
+    if (t.visible < 0.5 || !held.count({t.class_name, name})) return;
+    outcome.pose_judged = true;
+    outcome.add_s = std::numeric_limits<double>::infinity();
+    if (!outcome.correct || outcome.predicted_model != name || !outcome.pose) return;
+    const Points& model = points.of(t.model);
+    outcome.add_s =
+        add_s(model, t.pose, outcome.pose->cast<double>()) / posed_diameter(model, t.pose);
+    outcome.pose_correct = outcome.add_s < kAddSThreshold;
+}
+
+}  // namespace
+
 SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneSet& set,
                                       const SceneEvaluationOptions& options) {
     SceneEvaluationReport report;
@@ -117,6 +215,15 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
     report.grouping =
         options.segmentation.grouping == Grouping::kConvexity ? "convexity" : "euclidean";
     std::map<std::string, SceneTypeSummary> types;
+    const std::optional<SceneTruth> truth = read_truth(set.path);
+    std::optional<ModelPoints> model_points;
+    std::set<std::pair<std::string, std::string>> held;  // (class, model name) of the database
+    if (truth) {
+        report.truth = truth->root;
+        model_points.emplace(truth->root);
+        for (const ViewLabel& label : recognizer.classifier().labels())
+            held.emplace(label.class_name, label.model_name);
+    }
     double segment_ms = 0.0, recognize_ms = 0.0;
     std::size_t frames = 0;
     for (std::size_t s = 0; s < set.scenes.size(); ++s) {
@@ -129,7 +236,8 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
             SegmentationResult segmentation = segment_scene(cloud, options.segmentation);
             const double segmented = ms_since(start);
             start = std::chrono::steady_clock::now();
-            const SceneRecognition recognition = recognizer.recognize(std::move(segmentation));
+            const SceneRecognition recognition =
+                recognizer.recognize(std::move(segmentation), cloud);
             segment_ms += segmented;
             recognize_ms += ms_since(start);
             ++frames;
@@ -159,11 +267,16 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                 if (o.cluster >= 0) {
                     const RecognizedObject& r =
                         recognition.objects[static_cast<std::size_t>(o.cluster)];
-                    if (r.classified()) outcome.predicted_class = r.classification.class_name;
+                    if (r.classified()) {
+                        outcome.predicted_class = r.classification.class_name;
+                        outcome.predicted_model = r.classification.best_model;
+                        outcome.pose = r.classification.pose;
+                    }
                 }
                 outcome.correct = o.outcome == SegmentOutcome::kFound &&
                                   !outcome.true_class.empty() &&
                                   outcome.predicted_class == outcome.true_class;
+                if (truth) judge_pose(*truth, *model_points, held, outcome);
                 for (SceneTypeSummary* t : rows) {
                     ++t->objects;
                     t->found += o.outcome == SegmentOutcome::kFound;
@@ -172,6 +285,8 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                     t->missed += o.outcome == SegmentOutcome::kMissed;
                     t->labelled += !outcome.true_class.empty();
                     t->correct += outcome.correct;
+                    t->posed += outcome.pose_judged;
+                    t->pose_correct += outcome.pose_correct;
                 }
                 report.objects.push_back(std::move(outcome));
             }

@@ -1,8 +1,10 @@
 #include "esf/scene_report.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <system_error>
 
@@ -52,11 +54,24 @@ void object_rows(std::ostringstream& html, const SceneEvaluationReport& report, 
 
 }  // namespace
 
+namespace {
+
+nlohmann::json pose_or_null(const std::optional<Eigen::Matrix4f>& pose) {
+    if (!pose) return nullptr;
+    nlohmann::json out = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) out.push_back((*pose)(r, c));
+    return out;
+}
+
+}  // namespace
+
 std::string scene_report_json(const SceneEvaluationReport& report) {
     nlohmann::json out;
     out["scene_set"] = report.scene_set;
     out["database"] = report.database;
     out["grouping"] = report.grouping;
+    out["truth"] = report.truth.empty() ? nlohmann::json(nullptr) : nlohmann::json(report.truth);
     out["types"] = nlohmann::json::array();
     for (const SceneTypeSummary& t : report.types)
         out["types"].push_back({{"type", t.type},
@@ -72,20 +87,31 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
                                 {"shared_clusters", t.shared_clusters},
                                 {"labelled", t.labelled},
                                 {"correct", t.correct},
-                                {"end_to_end", t.end_to_end()}});
+                                {"end_to_end", t.end_to_end()},
+                                {"posed", t.posed},
+                                {"pose_correct", t.pose_correct},
+                                {"pose_rate", t.pose_rate()}});
     out["objects"] = nlohmann::json::array();
     for (const SceneObjectOutcome& o : report.objects)
-        out["objects"].push_back({{"scene", o.scene},
-                                  {"type", o.type},
-                                  {"object_id", o.segmentation.object_id},
-                                  {"points", o.segmentation.points},
-                                  {"outcome", to_string(o.segmentation.outcome)},
-                                  {"coverage", o.segmentation.coverage},
-                                  {"purity", o.segmentation.purity},
-                                  {"parts", o.segmentation.parts},
-                                  {"class", o.true_class},
-                                  {"predicted", o.predicted_class},
-                                  {"correct", o.correct}});
+        out["objects"].push_back(
+            {{"scene", o.scene},
+             {"type", o.type},
+             {"object_id", o.segmentation.object_id},
+             {"points", o.segmentation.points},
+             {"outcome", to_string(o.segmentation.outcome)},
+             {"coverage", o.segmentation.coverage},
+             {"purity", o.segmentation.purity},
+             {"parts", o.segmentation.parts},
+             {"class", o.true_class},
+             {"predicted", o.predicted_class},
+             {"correct", o.correct},
+             {"model", o.predicted_model.empty() ? nlohmann::json(nullptr)
+                                                 : nlohmann::json(o.predicted_model)},
+             {"pose", pose_or_null(o.pose)},
+             {"add_s", o.pose_judged && std::isfinite(o.add_s) ? nlohmann::json(o.add_s)
+                                                               : nlohmann::json(nullptr)},
+             {"pose_judged", o.pose_judged},
+             {"pose_correct", o.pose_correct}});
     out["failures"] = nlohmann::json::array();
     for (const SceneFailure& f : report.failures)
         out["failures"].push_back({{"file", f.file}, {"error", f.error}});

@@ -106,6 +106,14 @@ void run_scene_eval(const EvalArgs& args) {
             "shared: clusters holding parts of two or more objects; end-to-end: found and named "
             "right\nsegment %.2f ms, describe + classify %.2f ms per frame\n",
             report.segment_ms, report.recognize_ms);
+        if (!report.truth.empty()) {
+            std::printf(
+                "\npose (truth.json; objects at least half visible whose model %s holds):\n",
+                args.database.c_str());
+            for (const SceneTypeSummary& t : report.types)
+                std::printf("%-16s %7zu judged, ADD-S < 0.1 d: %s%%\n", t.type.c_str(), t.posed,
+                            percent_of(t.pose_correct, t.posed).c_str());
+        }
     }
     std::cout.flush();
     if (!std::cout) throw std::runtime_error("writing the output failed");

@@ -178,6 +178,9 @@ class Recognizer {
     /// Classifies every cluster of a segmented scene (described in parallel, classified as a
     /// batch); a cluster that cannot be described gets its error, the others their class.
     SceneRecognition recognize(SegmentationResult segmentation) const;
+    /// The same for a segmentation of `frame`: verification (when on) checks each hypothesis
+    /// against the frame's free space when the frame has the verification camera's size.
+    SceneRecognition recognize(SegmentationResult segmentation, const PointCloud& frame) const;
     /// segment_scene() + recognize(). Throws what segment_scene() throws (an empty cloud or one
     /// without finite points, bad options); a scene without plane or objects is no error.
     SceneRecognition recognize_scene(const PointCloud& scene,

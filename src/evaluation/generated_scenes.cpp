@@ -119,7 +119,8 @@ GeneratedSceneSet generate_scenes(const std::string& root, const std::string& ou
     });
 
     std::string csv = "scene_file,object_id,class,scene_type\n";
-    nlohmann::json truth = {{"seed", options.clutter.seed}, {"root", root}};
+    nlohmann::json truth = {{"seed", options.clutter.seed},
+                            {"root", fs::absolute(root).lexically_normal().string()}};
     truth["scenes"] = nlohmann::json::array();
     for (std::size_t index = 0; index < options.scenes; ++index) {
         const ClutterType type = composer.type_of(index);

@@ -26,15 +26,18 @@ namespace {
 struct PointsAdaptor {
     const Points* points;
     std::size_t kdtree_get_point_count() const { return points->size(); }
-    float kdtree_get_pt(std::size_t i, std::size_t dim) const { return (*points)[i][static_cast<Eigen::Index>(dim)]; }
+    float kdtree_get_pt(std::size_t i, std::size_t dim) const {
+        return (*points)[i][static_cast<Eigen::Index>(dim)];
+    }
     template <class Box>
     bool kdtree_get_bbox(Box&) const {
         return false;
     }
 };
 
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
-                                                   PointsAdaptor, 3, std::size_t>;
+using KdTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
+                                        PointsAdaptor, 3, std::size_t>;
 
 class NearestPoints {
   public:
@@ -80,7 +83,8 @@ Eigen::Matrix4d exp_se3(const Eigen::Matrix<double, 6, 1>& x) {
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
     const Eigen::Vector3d w = x.head<3>();
     const double angle = w.norm();
-    if (angle > 1e-12) m.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+    if (angle > 1e-12)
+        m.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
     m.topRightCorner<3, 1>() = x.tail<3>();
     return m;
 }
@@ -103,7 +107,8 @@ class SeenSpace {
                     const long uu = u + du, vv = v + dv;
                     if (uu >= 0 && vv >= 0 && uu < static_cast<long>(width_) &&
                         vv < static_cast<long>(height_))
-                        outline_[static_cast<std::size_t>(vv) * width_ + static_cast<std::size_t>(uu)] = 1;
+                        outline_[static_cast<std::size_t>(vv) * width_ +
+                                 static_cast<std::size_t>(uu)] = 1;
                 }
         }
     }
@@ -113,8 +118,8 @@ class SeenSpace {
         if (frame_ == nullptr) return false;
         long u = 0, v = 0;
         if (!project(p, u, v)) return true;
-        const Eigen::Vector3f& seen = frame_->points[static_cast<std::size_t>(v) * width_ +
-                                                     static_cast<std::size_t>(u)];
+        const Eigen::Vector3f& seen =
+            frame_->points[static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u)];
         return !std::isfinite(seen.z()) || static_cast<double>(seen.z()) < p.z() - margin;
     }
 
@@ -122,7 +127,8 @@ class SeenSpace {
     int violates(const Eigen::Vector3d& p, double margin) const {
         long u = 0, v = 0;
         if (!project(p, u, v)) return -1;
-        const std::size_t pixel = static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u);
+        const std::size_t pixel =
+            static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u);
         if (frame_ == nullptr) return outline_[pixel] ? 0 : 1;
         const Eigen::Vector3f& seen = frame_->points[pixel];
         if (!std::isfinite(seen.z())) return -1;
@@ -198,7 +204,8 @@ ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t co
     std::size_t inward = 0;
     for (std::size_t i = 0; i < count; ++i) {
         // Stratified along the cumulative area: evenly spread, still random.
-        const double target = (static_cast<double>(i) + uniform()) / static_cast<double>(count) * total;
+        const double target =
+            (static_cast<double>(i) + uniform()) / static_cast<double>(count) * total;
         const std::size_t t = static_cast<std::size_t>(
             std::lower_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin());
         const Eigen::Vector3i& f = mesh.triangles[std::min(t, mesh.triangles.size() - 1)];
@@ -233,8 +240,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
     if (observation.frame != nullptr &&
         (observation.frame->width != static_cast<std::uint32_t>(options.camera.width) ||
          observation.frame->height != static_cast<std::uint32_t>(options.camera.height) ||
-         observation.frame->points.size() !=
-             static_cast<std::size_t>(options.camera.width) * static_cast<std::size_t>(options.camera.height)))
+         observation.frame->points.size() != static_cast<std::size_t>(options.camera.width) *
+                                                 static_cast<std::size_t>(options.camera.height)))
         throw std::invalid_argument("verification: the frame is not an organised " +
                                     std::to_string(options.camera.width) + "x" +
                                     std::to_string(options.camera.height) + " cloud");
@@ -322,8 +329,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
             ata += row * row.transpose();
             atb += row * b;
             Eigen::Matrix<double, 3, 7> rows;
-            rows.leftCols<3>() << 0.0, arm.z(), -arm.y(), -arm.z(), 0.0, arm.x(), arm.y(),
-                -arm.x(), 0.0;
+            rows.leftCols<3>() << 0.0, arm.z(), -arm.y(), -arm.z(), 0.0, arm.x(), arm.y(), -arm.x(),
+                0.0;
             rows.middleCols<3>(3).setIdentity();
             rows.col(6) = arm;
             ata += kPointWeight * rows.transpose() * rows;
@@ -385,7 +392,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
         }
         out.fit.inliers =
             static_cast<double>(inliers) / static_cast<double>(object.points().size());
-        out.fit.rms_mm = inliers ? 1000.0 * std::sqrt(squared_sum / static_cast<double>(inliers)) : 0.0;
+        out.fit.rms_mm =
+            inliers ? 1000.0 * std::sqrt(squared_sum / static_cast<double>(inliers)) : 0.0;
     }
     // Violations, and support: the share of the visible surface (not hidden by something
     // nearer) that has an object point on it.
@@ -411,8 +419,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
     out.fit.violations =
         decided ? static_cast<double>(violations) / static_cast<double>(decided) : 0.0;
     out.fit.support = exposed ? static_cast<double>(supported) / static_cast<double>(exposed) : 0.0;
-    out.verified = out.fit.inliers >= options.min_inliers &&
-                   out.fit.violations <= options.max_violations;
+    out.verified =
+        out.fit.inliers >= options.min_inliers && out.fit.violations <= options.max_violations;
     return out;
 }
 

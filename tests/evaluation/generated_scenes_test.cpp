@@ -5,16 +5,21 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <string>
 
 #include "esf/cloud_io.hpp"
+#include "esf/database.hpp"
+#include "esf/evaluation/pose_accuracy.hpp"
 #include "esf/mesh.hpp"
+#include "esf/recognizer.hpp"
 #include "esf/scene_evaluation.hpp"
 
 namespace fs = std::filesystem;
@@ -165,3 +170,67 @@ TEST_F(GeneratedScenesTest, RejectsBadRequests) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(PoseAccuracy, AddSOfHandComputedPoses) {
+    const esf::Points two = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0)};
+    Eigen::Matrix4d shifted = Eigen::Matrix4d::Identity();
+    shifted(2, 3) = 0.1;
+    EXPECT_NEAR(esf::add_s(two, Eigen::Matrix4d::Identity(), shifted), 0.1, 1e-12);
+    shifted(2, 3) = 0.0;
+    shifted(0, 3) = 1.0;  // (0,0,0) -> nearest (1,0,0): 1; (1,0,0) -> itself: 0
+    EXPECT_NEAR(esf::add_s(two, Eigen::Matrix4d::Identity(), shifted), 0.5, 1e-12);
+    // A half turn about the segment's middle maps the pair onto itself: ADD-S 0.
+    Eigen::Matrix4d turned = Eigen::Matrix4d::Identity();
+    turned.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    turned(0, 3) = 1.0;
+    EXPECT_NEAR(esf::add_s(two, Eigen::Matrix4d::Identity(), turned), 0.0, 1e-12);
+    Eigen::Matrix4d scaled = Eigen::Matrix4d::Identity() * 3.0;
+    scaled(3, 3) = 1.0;
+    EXPECT_NEAR(esf::posed_diameter(two, scaled), 3.0, 1e-12);
+    EXPECT_THROW(esf::add_s({}, Eigen::Matrix4d::Identity(), Eigen::Matrix4d::Identity()),
+                 std::invalid_argument);
+}
+
+}  // namespace
+
+TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTheModels) {
+    esf::SceneGenerationOptions options;
+    options.scenes = 7;
+    options.clutter.seed = 2;
+    esf::generate_scenes(root_.string(), (base_ / "s").string(), options);
+    const std::string db_path = (base_ / "db.sqlite").string();
+    {
+        esf::Database db(db_path, esf::OpenMode::kWrite);
+        esf::TrainingOptions training;
+        training.render.level = 0;
+        training.descriptor_options.samples = 5000;
+        esf::train(root_.string(), db, training);
+    }
+    const esf::SceneSet set = esf::read_scene_set((base_ / "s" / "scenes.csv").string());
+    const esf::SceneEvaluationReport plain = esf::evaluate_scenes(esf::Recognizer(db_path), set);
+    esf::RecognizerOptions verify;
+    verify.verification_meshes = root_.string();
+    const esf::SceneEvaluationReport verified =
+        esf::evaluate_scenes(esf::Recognizer(db_path, verify), set);
+    EXPECT_EQ(plain.truth, fs::absolute(root_).lexically_normal().string());
+    const esf::SceneTypeSummary& a = plain.types.back();
+    const esf::SceneTypeSummary& b = verified.types.back();
+    ASSERT_EQ(a.type, "all");
+    EXPECT_GT(a.posed, 5u);
+    EXPECT_EQ(a.posed, b.posed);
+    // A training view's pose is not where the object stands; the fitted pose is, for the
+    // objects named with their own model.
+    EXPECT_EQ(a.pose_correct, 0u);
+    std::size_t own_model = 0, placed = 0;
+    for (const esf::SceneObjectOutcome& o : verified.objects) {
+        if (!o.pose_judged || !std::isfinite(o.add_s)) continue;
+        ++own_model;
+        placed += o.pose_correct;
+    }
+    EXPECT_GT(own_model, 0u);
+    EXPECT_GE(static_cast<double>(placed), 0.8 * static_cast<double>(own_model));
+    EXPECT_EQ(b.pose_correct, placed);
+}

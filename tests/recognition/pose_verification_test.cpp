@@ -64,8 +64,8 @@ Eigen::Isometry3d standing_pose(double yaw_deg) {
     const Eigen::Isometry3d world_to_camera =
         esf::look_at(Eigen::Vector3d(0.0, -0.57, 0.57), Eigen::Vector3d(0.0, 0.0, 0.08));
     Eigen::Isometry3d model_to_world = Eigen::Isometry3d::Identity();
-    model_to_world.rotate(Eigen::AngleAxisd(yaw_deg * std::numbers::pi / 180.0,
-                                            Eigen::Vector3d::UnitZ()));
+    model_to_world.rotate(
+        Eigen::AngleAxisd(yaw_deg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()));
     return world_to_camera * model_to_world;
 }
 
@@ -160,18 +160,19 @@ TEST(FitModel, AFrameShowsTheTableThroughAWrongHypothesis) {
         if (frame.labels[i] == esf::kSceneLabelFirstObject) seen.push_back(frame.points[i]);
     Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
     view.topLeftCorner<3, 3>() = world_to_camera.linear();
-    const esf::PoseFit as_box = esf::fit_model(
-        esf::sample_model_surface(box_mesh(0.09, 0.09, 0.12), 1.0, 3000, 1), view,
-        {seen, &frame}, {});
-    const esf::PoseFit as_can = esf::fit_model(esf::sample_model_surface(can, 1.0, 3000, 1),
-                                               view, {seen, &frame}, {});
+    const esf::PoseFit as_box =
+        esf::fit_model(esf::sample_model_surface(box_mesh(0.09, 0.09, 0.12), 1.0, 3000, 1), view,
+                       {seen, &frame}, {});
+    const esf::PoseFit as_can =
+        esf::fit_model(esf::sample_model_surface(can, 1.0, 3000, 1), view, {seen, &frame}, {});
     EXPECT_LT(as_can.fit.violations, 0.05);  // pixels on the outline
     EXPECT_GT(as_box.fit.violations, as_can.fit.violations + 0.05);
     EXPECT_GT(as_can.fit.score(), as_box.fit.score());
 }
 
 TEST(FitModel, RejectsBadInput) {
-    const esf::ModelSurface surface = esf::sample_model_surface(box_mesh(0.1, 0.1, 0.1), 1.0, 500, 0);
+    const esf::ModelSurface surface =
+        esf::sample_model_surface(box_mesh(0.1, 0.1, 0.1), 1.0, 500, 0);
     const esf::Points two = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0.01f, 0, 1)};
     EXPECT_THROW(esf::fit_model(surface, Eigen::Matrix4d::Identity(), {two, nullptr}, {}),
                  std::invalid_argument);

@@ -54,15 +54,15 @@ struct FitScore {
 };
 
 struct VerificationOptions {
-    std::size_t candidates = 3;        ///< distinct models tried, nearest first (>= 1)
+    std::size_t candidates = 3;  ///< distinct models tried, nearest first (>= 1)
     /// false: the candidates are models of the class the neighbours named, and verification
     /// picks the model and pose; true: models of any class, and the best fit names the class too
     /// (see BENCHMARKS.md for what each does to accuracy).
     bool decide_class = false;
-    int iterations = 10;               ///< ICP iterations (>= 1)
-    std::size_t surface_points = 2000; ///< samples of each model's surface
-    double inlier_distance = 0.004;    ///< metres
-    double violation_margin = 0.015;   ///< metres
+    int iterations = 10;                ///< ICP iterations (>= 1)
+    std::size_t surface_points = 2000;  ///< samples of each model's surface
+    double inlier_distance = 0.004;     ///< metres
+    double violation_margin = 0.015;    ///< metres
     double min_inliers = 0.5;
     double max_violations = 0.25;
     CameraIntrinsics camera = CameraIntrinsics::kinect();  ///< for lone clouds (no frame)
@@ -89,9 +89,9 @@ struct PoseFit {
 
 /// Aligns `surface` to the observation from the rotation of `view_pose` (model -> the training
 /// camera; its scale, if any, is removed) and scores the result. With `free_scale` (a model whose
-/// size is a guess: not metric in the catalog), the model's size is fitted too. Throws std::invalid_argument for
-/// fewer than 3 observed points, a frame that is not organised or not of the camera's size,
-/// bad options or a non-finite pose.
+/// size is a guess: not metric in the catalog), the model's size is fitted too. Throws
+/// std::invalid_argument for fewer than 3 observed points, a frame that is not organised or not of
+/// the camera's size, bad options or a non-finite pose.
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   const Observation& observation, const VerificationOptions& options,
                   bool free_scale = false);
