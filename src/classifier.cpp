@@ -18,6 +18,17 @@ VoteRule parse_vote_rule(const std::string& name) {
     throw std::invalid_argument("unknown vote rule '" + name + "' (nearest or majority)");
 }
 
+void adopt_neighbour(Classification& c, const NeighbourView& n) {
+    c.class_name = n.class_name;
+    c.class_id = n.class_id;
+    c.best_model = n.model_name;
+    c.best_model_id = n.model_id;
+    c.best_view = n.view;
+    c.best_index = n.index;
+    c.best_distance = n.distance;
+    c.pose = n.pose;
+}
+
 Classification classify_neighbours(std::span<const KnnNeighbour> neighbours,
                                    std::span<const ViewLabel> labels, VoteRule rule) {
     if (neighbours.empty()) throw std::invalid_argument("classify: no neighbours to vote");
@@ -60,17 +71,9 @@ Classification classify_neighbours(std::span<const KnnNeighbour> neighbours,
         std::sort(tallies.begin() + 1, tallies.end(), majority_order);
     else
         std::sort(tallies.begin(), tallies.end(), majority_order);
-    const NeighbourView& best = result.neighbours[tallies.front().first];
-    result.class_name = best.class_name;
-    result.class_id = best.class_id;
+    adopt_neighbour(result, result.neighbours[tallies.front().first]);
     result.confidence =
         static_cast<double>(tallies.front().vote.votes) / static_cast<double>(neighbours.size());
-    result.best_model = best.model_name;
-    result.best_model_id = best.model_id;
-    result.best_view = best.view;
-    result.best_index = best.index;
-    result.best_distance = best.distance;
-    result.pose = best.pose;
     result.votes.reserve(tallies.size());
     for (Tally& t : tallies) result.votes.push_back(std::move(t.vote));
     return result;

@@ -396,13 +396,7 @@ void Recognizer::verify(Classification& c, const Observation& observation) const
     std::rotate(c.neighbours.begin(), c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen),
                 c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen) + 1);
     const NeighbourView& n = c.neighbours.front();
-    c.class_name = n.class_name;
-    c.class_id = n.class_id;
-    c.best_model = n.model_name;
-    c.best_model_id = n.model_id;
-    c.best_view = n.view;
-    c.best_index = n.index;
-    c.best_distance = n.distance;
+    adopt_neighbour(c, n);
     const double scale = impl_->models.at(static_cast<std::size_t>(n.model_id)).scale;
     Eigen::Matrix4d scaled = fits[best].model_to_camera;
     scaled.topLeftCorner<3, 3>() *= scale;

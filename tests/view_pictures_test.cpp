@@ -18,25 +18,14 @@
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
 #include "esf/training.hpp"
+#include "support/test_meshes.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
 /// A closed box [-50, 50] x [-30, 30] x [0, 200] (millimetres), twelve triangles.
-esf::Mesh box_mm() {
-    esf::Mesh mesh;
-    for (int i = 0; i < 8; ++i)
-        mesh.vertices.emplace_back(i & 1 ? 50.0f : -50.0f, i & 2 ? 30.0f : -30.0f,
-                                   i & 4 ? 200.0f : 0.0f);
-    const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : faces) {
-        mesh.triangles.emplace_back(f[0], f[1], f[2]);
-        mesh.triangles.emplace_back(f[0], f[2], f[3]);
-    }
-    return mesh;
-}
+esf::Mesh box_mm() { return esf::test::standing_box(100.0, 60.0, 200.0); }
 
 class ViewPicturesTest : public ::testing::Test {
   protected:

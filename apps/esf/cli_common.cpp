@@ -118,6 +118,26 @@ CLI::Validator fold_text() {
 
 }  // namespace
 
+CLI::Option* add_threads_option(CLI::App& cmd, int& threads) {
+    return cmd.add_option("--threads", threads, "Worker threads, 0 = all cores")
+        ->transform(thread_limit())
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+}
+
+CLI::Option* add_seed_option(CLI::App& cmd, std::uint64_t& seed, const std::string& what) {
+    return cmd.add_option("--seed", seed, what)->check(non_negative_seed())->capture_default_str();
+}
+
+void add_catalog_options(CLI::App& cmd, std::string& catalog, bool& no_catalog) {
+    auto* file =
+        cmd.add_option("--catalog", catalog, "Catalog CSV (default: ROOT/catalog.csv when present)")
+            ->check(CLI::ExistingFile);
+    cmd.add_flag("--no-catalog", no_catalog,
+                 "Ignore any catalog: all models metric, each its own group")
+        ->excludes(file);
+}
+
 void GroupOptions::add_to(CLI::App& cmd) {
     cmd.add_option("--groups", only_, "Only the models of these catalog groups (comma-separated)")
         ->delimiter(',');

@@ -2,6 +2,7 @@
 // Helpers shared by the esf subcommands: exit codes, errors, progress display.
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,13 @@ CLI::Validator non_negative_seed();
 /// A warning line on stderr when `database` holds learned weights of `descriptor` (empty: the
 /// only kind) that were learned before the database last changed: they are ignored.
 void warn_if_weights_stale(const std::string& database, const std::string& descriptor);
+
+/// --threads N (0 = all cores; above the limit: the limit, with a warning).
+CLI::Option* add_threads_option(CLI::App& cmd, int& threads);
+/// --seed S with the help text `what` (refuses negative values).
+CLI::Option* add_seed_option(CLI::App& cmd, std::uint64_t& seed, const std::string& what);
+/// --catalog CSV and --no-catalog (exclusive): how a mesh root's models are sized and grouped.
+void add_catalog_options(CLI::App& cmd, std::string& catalog, bool& no_catalog);
 
 /// --groups, --exclude-groups, --fold K/N and --other-folds K/N: which catalog groups of a root
 /// a command takes (esf::GroupSelection). Call selection() after parsing.

@@ -106,13 +106,8 @@ void add_generate_scenes_command(CLI::App& app) {
     cmd->add_option("-n,--scenes", args->scenes, "Number of scenes")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
-    cmd->add_option("--seed", args->seed, "Random seed (layouts, cameras, sensor noise)")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_seed_option(*cmd, args->seed, "Random seed (layouts, cameras, sensor noise)");
+    add_threads_option(*cmd, args->threads);
     std::vector<std::string> type_names;
     for (const ClutterType t : clutter_types()) type_names.emplace_back(to_string(t));
     cmd->add_option("--types", args->types, "Scene types in turn (comma-separated; default: all)")
@@ -135,12 +130,7 @@ void add_generate_scenes_command(CLI::App& app) {
                     "Highest camera, degrees above the table")
         ->check(CLI::Range(1.0, 89.0))
         ->capture_default_str();
-    auto* catalog = cmd->add_option("--catalog", args->catalog,
-                                    "Catalog CSV (default: ROOT/catalog.csv when present)")
-                        ->check(CLI::ExistingFile);
-    cmd->add_flag("--no-catalog", args->no_catalog,
-                  "Ignore any catalog: all models metric, each its own group")
-        ->excludes(catalog);
+    add_catalog_options(*cmd, args->catalog, args->no_catalog);
     args->groups.add_to(*cmd);
     cmd->add_flag("--json", args->json, "Print the run's summary as one JSON object");
     cmd->callback([args] { run_generate_scenes(*args); });

@@ -160,13 +160,8 @@ void add_train_command(CLI::App& app) {
                     "View sphere subdivisions: 0 = 20, 1 = 80, 2 = 320 views")
         ->check(CLI::Range(0, 4))
         ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    cmd->add_option("--seed", args->seed, "Random seed (sensor noise, descriptor sampling)")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
+    add_threads_option(*cmd, args->threads);
+    add_seed_option(*cmd, args->seed, "Random seed (sensor noise, descriptor sampling)");
     cmd->add_option("--samples", args->samples,
                     "Point triples per view of esf, esf-angles, sdvs, d2 (paper: 20000)")
         ->capture_default_str();
@@ -210,12 +205,7 @@ void add_train_command(CLI::App& app) {
                     "Views with fewer points are skipped (and counted)")
         ->check(CLI::Range(3, 1000000))
         ->capture_default_str();
-    auto* catalog = cmd->add_option("--catalog", args->catalog,
-                                    "Catalog CSV (default: ROOT/catalog.csv when present)")
-                        ->check(CLI::ExistingFile);
-    cmd->add_flag("--no-catalog", args->no_catalog,
-                  "Ignore any catalog: all models metric, each its own group")
-        ->excludes(catalog);
+    add_catalog_options(*cmd, args->catalog, args->no_catalog);
     args->groups.add_to(*cmd);
     cmd->add_flag("--json", args->json, "Print the run's summary as one JSON object");
     cmd->callback([args] { run_train(*args); });

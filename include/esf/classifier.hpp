@@ -96,6 +96,10 @@ struct Classification {
     bool verified = false;  ///< a candidate met the verification thresholds
 };
 
+/// Makes `n` the classification's choice: class, model, view, index, distance and pose (the
+/// confidence and votes are left as they are).
+void adopt_neighbour(Classification& c, const NeighbourView& n);
+
 /// Classifies by `rule` from `neighbours` (nearest first, as KnnIndex::search returns them)
 /// whose view ids index `labels`. Throws std::invalid_argument for no neighbours or a view id
 /// out of range.

@@ -42,7 +42,8 @@ double posed_diameter(std::span<const Eigen::Vector3f> model_points, const Eigen
     const std::vector<Eigen::Vector3d> a = posed(model_points, truth);
     double best = 0.0;
     for (std::size_t i = 0; i < a.size(); ++i)
-        for (std::size_t j = i + 1; j < a.size(); ++j) best = std::max(best, (a[i] - a[j]).squaredNorm());
+        for (std::size_t j = i + 1; j < a.size(); ++j)
+            best = std::max(best, (a[i] - a[j]).squaredNorm());
     return std::sqrt(best);
 }
 

@@ -21,23 +21,11 @@
 #include "esf/mesh.hpp"
 #include "esf/recognizer.hpp"
 #include "esf/scene_evaluation.hpp"
+#include "support/test_meshes.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-esf::Mesh box_mesh(float sx, float sy, float sz) {
-    esf::Mesh mesh;
-    for (int i = 0; i < 8; ++i)
-        mesh.vertices.emplace_back(i & 1 ? sx : 0.0f, i & 2 ? sy : 0.0f, i & 4 ? sz : 0.0f);
-    const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : faces) {
-        mesh.triangles.emplace_back(f[0], f[1], f[2]);
-        mesh.triangles.emplace_back(f[0], f[2], f[3]);
-    }
-    return mesh;
-}
 
 std::string read_bytes(const fs::path& path) {
     std::ifstream in(path, std::ios::binary);
@@ -62,10 +50,9 @@ class GeneratedScenesTest : public ::testing::Test {
             const std::string name = "m" + std::to_string(i);
             fs::create_directories(root_ / category);
             const bool mm = i == 1;
-            const float k = mm ? 1000.0f : 1.0f;
-            esf::write_ply_mesh(
-                (root_ / category / (name + ".ply")).string(),
-                box_mesh(k * (0.05f + 0.02f * static_cast<float>(i)), k * 0.06f, k * 0.1f));
+            const double k = mm ? 1000.0 : 1.0;
+            esf::write_ply_mesh((root_ / category / (name + ".ply")).string(),
+                                esf::test::standing_box(k * (0.05 + 0.02 * i), k * 0.06, k * 0.1));
             rows += category + "/" + name + ".ply," + category + ",test," + name + ",g" +
                     std::to_string(i) + "," + (mm ? "160" : "0.15") + "," + (mm ? "no" : "yes") +
                     "\n";

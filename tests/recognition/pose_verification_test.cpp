@@ -13,51 +13,9 @@
 
 #include "esf/render.hpp"
 #include "esf/view_sphere.hpp"
+#include "support/test_meshes.hpp"
 
 namespace {
-
-esf::Mesh box_mesh(double sx, double sy, double sz, bool clockwise = false) {
-    esf::Mesh mesh;
-    for (int i = 0; i < 8; ++i)
-        mesh.vertices.emplace_back(static_cast<float>((i & 1 ? 0.5 : -0.5) * sx),
-                                   static_cast<float>((i & 2 ? 0.5 : -0.5) * sy),
-                                   static_cast<float>(i & 4 ? sz : 0.0));
-    const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : faces) {
-        if (clockwise) {
-            mesh.triangles.emplace_back(f[0], f[2], f[1]);
-            mesh.triangles.emplace_back(f[0], f[3], f[2]);
-        } else {
-            mesh.triangles.emplace_back(f[0], f[1], f[2]);
-            mesh.triangles.emplace_back(f[0], f[2], f[3]);
-        }
-    }
-    return mesh;
-}
-
-esf::Mesh cylinder_mesh(double r, double h) {
-    esf::Mesh mesh;
-    const int sides = 64;
-    for (int ring = 0; ring < 2; ++ring)
-        for (int i = 0; i < sides; ++i) {
-            const double a = 2.0 * std::numbers::pi * i / sides;
-            mesh.vertices.emplace_back(static_cast<float>(r * std::cos(a)),
-                                       static_cast<float>(r * std::sin(a)),
-                                       static_cast<float>(ring * h));
-        }
-    mesh.vertices.emplace_back(0.0f, 0.0f, 0.0f);
-    mesh.vertices.emplace_back(0.0f, 0.0f, static_cast<float>(h));
-    const int bottom = 2 * sides, top = 2 * sides + 1;
-    for (int i = 0; i < sides; ++i) {
-        const int j = (i + 1) % sides;
-        mesh.triangles.emplace_back(i, j, sides + j);
-        mesh.triangles.emplace_back(i, sides + j, sides + i);
-        mesh.triangles.emplace_back(bottom, j, i);
-        mesh.triangles.emplace_back(top, sides + i, sides + j);
-    }
-    return mesh;
-}
 
 // Model -> camera: the model stands on z = 0 of a table seen 45 degrees from above, 0.8 m away.
 Eigen::Isometry3d standing_pose(double yaw_deg) {
@@ -82,8 +40,8 @@ double rotation_error_deg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 
 TEST(ModelSurface, SamplesLieOnTheFacesWithOutwardNormals) {
     for (const bool clockwise : {false, true}) {
-        const esf::ModelSurface s =
-            esf::sample_model_surface(box_mesh(0.2, 0.1, 0.3, clockwise), 2.0, 4000, 5);
+        const esf::ModelSurface s = esf::sample_model_surface(
+            esf::test::standing_box(0.2, 0.1, 0.3, clockwise), 2.0, 4000, 5);
         ASSERT_EQ(s.points.size(), 4000u);
         EXPECT_NEAR(s.diameter, 2.0 * 2.0 * std::sqrt(0.01 + 0.0025 + 0.0225), 1e-6);
         std::size_t top = 0;
@@ -98,14 +56,14 @@ TEST(ModelSurface, SamplesLieOnTheFacesWithOutwardNormals) {
         // The top face holds 0.02 of the 0.22 m^2 (file units).
         EXPECT_NEAR(static_cast<double>(top) / 4000.0, 0.02 / 0.22, 0.01);
     }
-    EXPECT_THROW(esf::sample_model_surface(box_mesh(0.1, 0.1, 0.1), 0.0, 10, 0),
+    EXPECT_THROW(esf::sample_model_surface(esf::test::standing_box(0.1, 0.1, 0.1), 0.0, 10, 0),
                  std::invalid_argument);
-    EXPECT_THROW(esf::sample_model_surface(box_mesh(0.1, 0.1, 0.1), 1.0, 0, 0),
+    EXPECT_THROW(esf::sample_model_surface(esf::test::standing_box(0.1, 0.1, 0.1), 1.0, 0, 0),
                  std::invalid_argument);
 }
 
 TEST(FitModel, RecoversThePoseFromAPerturbedView) {
-    const esf::Mesh box = box_mesh(0.16, 0.08, 0.22);
+    const esf::Mesh box = esf::test::standing_box(0.16, 0.08, 0.22);
     const Eigen::Isometry3d truth = standing_pose(25.0);
     const esf::Points seen = render(box, truth);
     ASSERT_GT(seen.size(), 2000u);
@@ -128,8 +86,8 @@ TEST(FitModel, RecoversThePoseFromAPerturbedView) {
 }
 
 TEST(FitModel, TheRightShapeScoresAboveABoxOfItsSize) {
-    const esf::Mesh can = cylinder_mesh(0.04, 0.12);
-    const esf::Mesh box = box_mesh(0.08, 0.08, 0.12);
+    const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
+    const esf::Mesh box = esf::test::standing_box(0.08, 0.08, 0.12);
     const Eigen::Isometry3d truth = standing_pose(0.0);
     const esf::Points seen = render(can, truth);
     Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
@@ -148,7 +106,7 @@ TEST(FitModel, TheRightShapeScoresAboveABoxOfItsSize) {
 
 TEST(FitModel, AFrameShowsTheTableThroughAWrongHypothesis) {
     // A can on a table; a box as wide as the can puts its corners where the table is seen.
-    const esf::Mesh can = cylinder_mesh(0.04, 0.12);
+    const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
     const Eigen::Isometry3d world_to_camera =
         esf::look_at(Eigen::Vector3d(0.0, -0.57, 0.57), Eigen::Vector3d(0.0, 0.0, 0.06));
     const esf::SceneObject object{&can, Eigen::Isometry3d::Identity()};
@@ -160,9 +118,9 @@ TEST(FitModel, AFrameShowsTheTableThroughAWrongHypothesis) {
         if (frame.labels[i] == esf::kSceneLabelFirstObject) seen.push_back(frame.points[i]);
     Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
     view.topLeftCorner<3, 3>() = world_to_camera.linear();
-    const esf::PoseFit as_box =
-        esf::fit_model(esf::sample_model_surface(box_mesh(0.09, 0.09, 0.12), 1.0, 3000, 1), view,
-                       {seen, &frame}, {});
+    const esf::PoseFit as_box = esf::fit_model(
+        esf::sample_model_surface(esf::test::standing_box(0.09, 0.09, 0.12), 1.0, 3000, 1), view,
+        {seen, &frame}, {});
     const esf::PoseFit as_can =
         esf::fit_model(esf::sample_model_surface(can, 1.0, 3000, 1), view, {seen, &frame}, {});
     EXPECT_LT(as_can.fit.violations, 0.05);  // pixels on the outline
@@ -172,7 +130,7 @@ TEST(FitModel, AFrameShowsTheTableThroughAWrongHypothesis) {
 
 TEST(FitModel, RejectsBadInput) {
     const esf::ModelSurface surface =
-        esf::sample_model_surface(box_mesh(0.1, 0.1, 0.1), 1.0, 500, 0);
+        esf::sample_model_surface(esf::test::standing_box(0.1, 0.1, 0.1), 1.0, 500, 0);
     const esf::Points two = {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0.01f, 0, 1)};
     EXPECT_THROW(esf::fit_model(surface, Eigen::Matrix4d::Identity(), {two, nullptr}, {}),
                  std::invalid_argument);

@@ -16,47 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "support/test_meshes.hpp"
+
 namespace {
-
-// An axis-aligned box with its bottom on z = 0, centred on the z axis.
-esf::Mesh box_mesh(double sx, double sy, double sz) {
-    esf::Mesh mesh;
-    for (int i = 0; i < 8; ++i)
-        mesh.vertices.emplace_back(static_cast<float>((i & 1 ? 0.5 : -0.5) * sx),
-                                   static_cast<float>((i & 2 ? 0.5 : -0.5) * sy),
-                                   static_cast<float>(i & 4 ? sz : 0.0));
-    const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-    for (const auto& f : faces) {
-        mesh.triangles.emplace_back(f[0], f[1], f[2]);
-        mesh.triangles.emplace_back(f[0], f[2], f[3]);
-    }
-    return mesh;
-}
-
-// A closed cylinder of radius r and height h standing on z = 0, 48 sides.
-esf::Mesh cylinder_mesh(double r, double h) {
-    esf::Mesh mesh;
-    const int sides = 48;
-    for (int ring = 0; ring < 2; ++ring)
-        for (int i = 0; i < sides; ++i) {
-            const double a = 2.0 * std::numbers::pi * i / sides;
-            mesh.vertices.emplace_back(static_cast<float>(r * std::cos(a)),
-                                       static_cast<float>(r * std::sin(a)),
-                                       static_cast<float>(ring * h));
-        }
-    mesh.vertices.emplace_back(0.0f, 0.0f, 0.0f);
-    mesh.vertices.emplace_back(0.0f, 0.0f, static_cast<float>(h));
-    const int bottom = 2 * sides, top = 2 * sides + 1;
-    for (int i = 0; i < sides; ++i) {
-        const int j = (i + 1) % sides;
-        mesh.triangles.emplace_back(i, j, sides + j);
-        mesh.triangles.emplace_back(i, sides + j, sides + i);
-        mesh.triangles.emplace_back(bottom, j, i);
-        mesh.triangles.emplace_back(top, sides + i, sides + j);
-    }
-    return mesh;
-}
 
 struct Shape {
     bool box = true;
@@ -93,8 +55,8 @@ class ClutterSceneTest : public ::testing::Test {
     void SetUp() override {
         const auto add = [&](const std::string& category, bool box, Eigen::Vector3d size) {
             esf::ClutterModel m;
-            m.mesh =
-                box ? box_mesh(size.x(), size.y(), size.z()) : cylinder_mesh(size.x(), size.z());
+            m.mesh = box ? esf::test::standing_box(size.x(), size.y(), size.z())
+                         : esf::test::standing_cylinder(size.x(), size.z());
             m.category = category;
             m.file = category + "/" + std::to_string(models_.size()) + ".ply";
             models_.push_back(std::move(m));
