@@ -134,18 +134,31 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
          << ", grouping " << xml_escape(report.grouping)
          << ". Found: one cluster holds at least 80 % of the object and is at least 80 % that "
             "object; end to end: found and named right.</p>\n";
+    const bool poses = !report.truth.empty();
     html << "<table><tr><th>scene type</th><th>scenes</th><th>objects</th><th>found</th>"
             "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
-            "<th>one cluster</th><th>end to end</th></tr>\n";
-    for (const SceneTypeSummary& t : report.types)
+            "<th>one cluster</th><th>end to end</th>"
+         << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th>" : "") << "</tr>\n";
+    for (const SceneTypeSummary& t : report.types) {
         html << "<tr><td>" << xml_escape(t.type) << "</td><td>" << t.scenes << "</td><td>"
              << t.objects << "</td><td>" << t.found << "</td><td>" << t.split << "</td><td>"
              << t.merged << "</td><td>" << t.missed << "</td><td>" << t.shared_clusters
              << "</td><td>" << share(t.found, t.objects) << "</td><td>"
-             << share(t.correct, t.labelled) << "</td></tr>\n";
+             << share(t.correct, t.labelled) << "</td>";
+        if (poses)
+            html << "<td>" << t.posed << "</td><td>" << share(t.pose_correct, t.posed) << "</td>";
+        html << "</tr>\n";
+    }
+    html << "</table>\n";
+    if (poses)
+        html << "<p>Poses: objects at least half visible whose model the database "
+                "holds, against truth.json (meshes under "
+             << xml_escape(report.truth)
+             << "); ADD-S: mean distance from the model under the true pose to the model under "
+                "the found one, as a share of its diameter.</p>\n";
     char timing[160];
     std::snprintf(timing, sizeof timing,
-                  "</table>\n<p>Segmentation %.2f ms, description and classification %.2f ms "
+                  "<p>Segmentation %.2f ms, description and classification %.2f ms "
                   "per frame.</p>\n",
                   report.segment_ms, report.recognize_ms);
     html << timing;

@@ -21,6 +21,7 @@
 #include "esf/mesh.hpp"
 #include "esf/recognizer.hpp"
 #include "esf/scene_evaluation.hpp"
+#include "esf/scene_report.hpp"
 #include "support/test_meshes.hpp"
 
 namespace fs = std::filesystem;
@@ -220,4 +221,11 @@ TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTh
     EXPECT_GT(own_model, 0u);
     EXPECT_GE(static_cast<double>(placed), 0.8 * static_cast<double>(own_model));
     EXPECT_EQ(b.pose_correct, placed);
+    // Reports carry the pose columns.
+    const nlohmann::json json = nlohmann::json::parse(esf::scene_report_json(verified));
+    EXPECT_EQ(json["types"].back()["pose_correct"].get<std::size_t>(), placed);
+    EXPECT_NE(esf::scene_report_html(verified, "t").find("ADD-S &lt; 0.1 d"), std::string::npos);
+    esf::SceneEvaluationReport without_truth = plain;
+    without_truth.truth.clear();
+    EXPECT_EQ(esf::scene_report_html(without_truth, "t").find("ADD-S"), std::string::npos);
 }
