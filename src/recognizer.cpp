@@ -379,13 +379,14 @@ void Recognizer::verify(Classification& c, const Observation& observation) const
         picks.push_back(i);
     }
     if (picks.empty()) return;
+    const PreparedObservation prepared(observation, o.camera);
     std::vector<PoseFit> fits;
     for (const std::size_t i : picks) {
         // A model the database rescaled (not metric in its catalog) has a guessed size.
         const int model = c.neighbours[i].model_id;
         const bool guessed = impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;
         fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
-                                 observation, o, guessed));
+                                 prepared, o, guessed));
     }
     std::size_t best = 0;
     for (std::size_t j = 1; j < fits.size(); ++j)

@@ -229,29 +229,55 @@ ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t co
     return surface;
 }
 
+struct PreparedObservation::Impl {
+    Impl(const Observation& observation, const CameraIntrinsics& camera)
+        : object(stride_sample(observation.points, kObjectSamples)), seen(observation, camera) {
+        for (const Eigen::Vector3f& p : object.points()) centroid += p.cast<double>();
+        centroid /= static_cast<double>(object.points().size());
+    }
+    NearestPoints object;
+    SeenSpace seen;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+};
+
+PreparedObservation::PreparedObservation(const Observation& observation,
+                                         const CameraIntrinsics& camera) {
+    camera.validate();
+    if (observation.points.size() < 3)
+        throw std::invalid_argument("verification: needs at least 3 object points, got " +
+                                    std::to_string(observation.points.size()));
+    if (observation.frame != nullptr &&
+        (observation.frame->width != static_cast<std::uint32_t>(camera.width) ||
+         observation.frame->height != static_cast<std::uint32_t>(camera.height) ||
+         observation.frame->points.size() !=
+             static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height)))
+        throw std::invalid_argument("verification: the frame is not an organised " +
+                                    std::to_string(camera.width) + "x" +
+                                    std::to_string(camera.height) + " cloud");
+    impl_ = std::make_unique<Impl>(observation, camera);
+}
+
+PreparedObservation::~PreparedObservation() = default;
+PreparedObservation::PreparedObservation(PreparedObservation&&) noexcept = default;
+PreparedObservation& PreparedObservation::operator=(PreparedObservation&&) noexcept = default;
+
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   const Observation& observation, const VerificationOptions& options,
                   bool free_scale) {
     validate(options);
-    if (observation.points.size() < 3)
-        throw std::invalid_argument("verification: needs at least 3 object points, got " +
-                                    std::to_string(observation.points.size()));
+    return fit_model(surface, view_pose, PreparedObservation(observation, options.camera), options,
+                     free_scale);
+}
+
+PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
+                  const PreparedObservation& prepared, const VerificationOptions& options,
+                  bool free_scale) {
+    validate(options);
     if (!view_pose.allFinite()) throw std::invalid_argument("verification: pose is not finite");
-    if (observation.frame != nullptr &&
-        (observation.frame->width != static_cast<std::uint32_t>(options.camera.width) ||
-         observation.frame->height != static_cast<std::uint32_t>(options.camera.height) ||
-         observation.frame->points.size() != static_cast<std::size_t>(options.camera.width) *
-                                                 static_cast<std::size_t>(options.camera.height)))
-        throw std::invalid_argument("verification: the frame is not an organised " +
-                                    std::to_string(options.camera.width) + "x" +
-                                    std::to_string(options.camera.height) + " cloud");
     if (surface.points.empty() || surface.points.size() != surface.normals.size())
         throw std::invalid_argument("verification: empty model surface");
-
-    const NearestPoints object(stride_sample(observation.points, kObjectSamples));
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3f& p : object.points()) centroid += p.cast<double>();
-    centroid /= static_cast<double>(object.points().size());
+    const NearestPoints& object = prepared.impl_->object;
+    const Eigen::Vector3d& centroid = prepared.impl_->centroid;
 
     // Start: the view's rotation (scale removed), turned towards the object, centred on it.
     Eigen::Matrix3d rotation = view_pose.topLeftCorner<3, 3>();
@@ -397,7 +423,7 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
     }
     // Violations, and support: the share of the visible surface (not hidden by something
     // nearer) that has an object point on it.
-    const SeenSpace seen(observation, options.camera);
+    const SeenSpace& seen = prepared.impl_->seen;
     std::size_t decided = 0, violations = 0, exposed = 0, supported = 0;
     const double object_spacing = 0.01;
     for (std::size_t i = 0; i < points.size(); ++i) {

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 
 #include "esf/camera.hpp"
@@ -87,6 +88,24 @@ struct PoseFit {
     bool verified = false;
 };
 
+/// An observation made ready for several hypotheses: its k-d tree and what the sensor saw
+/// (the frame, or the object's outline) are built once. The observation's points and frame
+/// must outlive it. Throws std::invalid_argument for fewer than 3 points or a frame that is not
+/// an organised cloud of the camera's size.
+class PreparedObservation {
+  public:
+    PreparedObservation(const Observation& observation, const CameraIntrinsics& camera);
+    ~PreparedObservation();
+    PreparedObservation(PreparedObservation&&) noexcept;
+    PreparedObservation& operator=(PreparedObservation&&) noexcept;
+
+  private:
+    friend PoseFit fit_model(const ModelSurface&, const Eigen::Matrix4d&,
+                             const PreparedObservation&, const VerificationOptions&, bool);
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
 /// Aligns `surface` to the observation from the rotation of `view_pose` (model -> the training
 /// camera; its scale, if any, is removed) and scores the result. With `free_scale` (a model whose
 /// size is a guess: not metric in the catalog), the model's size is fitted too. Throws
@@ -94,6 +113,10 @@ struct PoseFit {
 /// the camera's size, bad options or a non-finite pose.
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   const Observation& observation, const VerificationOptions& options,
+                  bool free_scale = false);
+/// The same against a prepared observation (prepared with options.camera).
+PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
+                  const PreparedObservation& observation, const VerificationOptions& options,
                   bool free_scale = false);
 
 }  // namespace esf
