@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -109,6 +110,17 @@ inline void add_classification_json(nlohmann::json& out, const Classification& c
         out["verified"] = c.verified;
     }
     out["neighbours"] = neighbours_json(c);
+}
+
+/// For the text tables: "; verified: 83 % inliers, 2 % violations, 2.1 mm" (or "no fit: ..."),
+/// empty without verification.
+inline std::string fit_text(const Classification& c) {
+    if (!c.fit) return {};
+    char text[128];
+    std::snprintf(text, sizeof text, "; %s: %.0f %% inliers, %.0f %% violations, %.1f mm",
+                  c.verified ? "verified" : "no fit", 100.0 * c.fit->inliers,
+                  100.0 * c.fit->violations, c.fit->rms_mm);
+    return text;
 }
 
 /// "path: reason", without repeating the path when the reason starts with it.

@@ -94,9 +94,9 @@ void run_classify(const ClassifyArgs& args) {
         for (std::size_t i = 0; i < n; ++i) {
             if (!results[i].ok()) continue;
             const Classification& c = results[i].classification;
-            std::printf("%-*s  %-*s  %10.2f  %-*s  %4d  %8.4f\n", fw, args.files[i].c_str(), cw,
+            std::printf("%-*s  %-*s  %10.2f  %-*s  %4d  %8.4f%s\n", fw, args.files[i].c_str(), cw,
                         c.class_name.c_str(), c.confidence, mw, c.best_model.c_str(), c.best_view,
-                        c.best_distance);
+                        c.best_distance, fit_text(c).c_str());
         }
     }
     std::cout.flush();

@@ -109,7 +109,8 @@ void print_scene(const std::string& file, const SceneRecognition& scene, double 
             std::printf("  %2zu  %-*s  %4s  %-*s  %4s  %8s", i, cw, "-", "-", mw, "-", "-", "-");
         std::printf("  %7zu  %7.3f %7.3f %7.3f  %6.3f %6.3f %6.3f  %s%s%s\n", c.points.size(),
                     c.centroid.x(), c.centroid.y(), c.centroid.z(), c.size.x(), c.size.y(),
-                    c.size.z(), object_status(o), message.empty() ? "" : ": ", message.c_str());
+                    c.size.z(), object_status(o), message.empty() ? "" : ": ",
+                    (message + (o.classified() ? fit_text(k) : std::string())).c_str());
     }
 }
 
