@@ -10,6 +10,7 @@
 
 #include "atomic_file.hpp"
 #include "esf/error.hpp"
+#include "evaluation/matrix_json.hpp"
 #include "markup.hpp"
 
 namespace esf {
@@ -57,11 +58,7 @@ void object_rows(std::ostringstream& html, const SceneEvaluationReport& report, 
 namespace {
 
 nlohmann::json pose_or_null(const std::optional<Eigen::Matrix4f>& pose) {
-    if (!pose) return nullptr;
-    nlohmann::json out = nlohmann::json::array();
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) out.push_back((*pose)(r, c));
-    return out;
+    return pose ? detail::row_major_json(*pose) : nlohmann::json(nullptr);
 }
 
 }  // namespace

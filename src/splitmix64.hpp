@@ -31,6 +31,8 @@ class SplitMix64 {
 
     /// Uniform in [0, n) up to a bias below 2^-32 (n < 2^32).
     constexpr std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
+    /// Uniform in [0, 1): the top 53 bits of the next output.
+    constexpr double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 
   private:
     std::uint64_t state_;

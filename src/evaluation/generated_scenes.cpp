@@ -16,6 +16,7 @@
 #include "esf/error.hpp"
 #include "esf/mesh.hpp"
 #include "esf/parallel.hpp"
+#include "evaluation/matrix_json.hpp"
 
 namespace esf {
 
@@ -38,13 +39,6 @@ std::string csv_field(const std::string& text) {
         out += c;
     }
     return out + '"';
-}
-
-nlohmann::json row_major(const Eigen::Matrix4d& m) {
-    nlohmann::json out = nlohmann::json::array();
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) out.push_back(m(r, c));
-    return out;
 }
 
 void write_text(const fs::path& path, const std::string& text) {
@@ -95,14 +89,14 @@ GeneratedSceneSet generate_scenes(const std::string& root, const std::string& ou
                                 {"type", to_string(scene.type)},
                                 {"wall", scene.wall},
                                 {"table_edge", scene.table_edge},
-                                {"camera", row_major(scene.world_to_camera.matrix())}};
+                                {"camera", detail::row_major_json(scene.world_to_camera.matrix())}};
         truth["objects"] = nlohmann::json::array();
         for (const ClutterObject& o : scene.objects) {
             const ClutterModel& m = composer.models()[o.model];
             truth["objects"].push_back({{"object_id", o.object_id},
                                         {"class", m.category},
                                         {"model", m.file},
-                                        {"pose", row_major(o.pose)},
+                                        {"pose", detail::row_major_json(o.pose)},
                                         {"scale", m.scale},
                                         {"visible", o.visible},
                                         {"pixels", o.pixels},

@@ -200,19 +200,18 @@ ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t co
     surface.diameter = 2.0 * mesh.bounding_radius() * scale;
     const Eigen::Vector3d centre = (0.5 * (mesh.min_corner() + mesh.max_corner())).cast<double>();
     detail::SplitMix64 random(seed);
-    const auto uniform = [&] { return static_cast<double>(random.next() >> 11) * 0x1.0p-53; };
     std::size_t inward = 0;
     for (std::size_t i = 0; i < count; ++i) {
         // Stratified along the cumulative area: evenly spread, still random.
         const double target =
-            (static_cast<double>(i) + uniform()) / static_cast<double>(count) * total;
+            (static_cast<double>(i) + random.uniform()) / static_cast<double>(count) * total;
         const std::size_t t = static_cast<std::size_t>(
             std::lower_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin());
         const Eigen::Vector3i& f = mesh.triangles[std::min(t, mesh.triangles.size() - 1)];
         const Eigen::Vector3d a = mesh.vertices[static_cast<std::size_t>(f[0])].cast<double>();
         const Eigen::Vector3d b = mesh.vertices[static_cast<std::size_t>(f[1])].cast<double>();
         const Eigen::Vector3d c = mesh.vertices[static_cast<std::size_t>(f[2])].cast<double>();
-        double r1 = uniform(), r2 = uniform();
+        double r1 = random.uniform(), r2 = random.uniform();
         if (r1 + r2 > 1.0) {
             r1 = 1.0 - r1;
             r2 = 1.0 - r2;

@@ -36,7 +36,7 @@ constexpr std::uint64_t kNoiseKey = 0x6e6f697365ull;     // "noise"
 class Random {
   public:
     explicit Random(std::uint64_t seed) : mixer_(seed) {}
-    double uniform() { return static_cast<double>(mixer_.next() >> 11) * 0x1.0p-53; }
+    double uniform() { return mixer_.uniform(); }
     double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
     std::size_t below(std::size_t n) { return mixer_.below(n); }
     int between(int lo, int hi) {
