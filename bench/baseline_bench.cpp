@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/descriptor.hpp"
+#include "esf/descriptors/descriptor.hpp"
+#include "esf/io/cloud_io.hpp"
 
 namespace {
 

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "lzf.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "io/lzf.hpp"
 
 namespace {
 

@@ -10,10 +10,10 @@
 #include <random>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/esf_descriptor.hpp"
-#include "esf/surface_angles.hpp"
-#include "esf_trace.hpp"
+#include "descriptors/esf/esf_trace.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/descriptors/surface_angles.hpp"
+#include "esf/io/cloud_io.hpp"
 
 namespace {
 

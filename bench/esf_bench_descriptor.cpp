@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "esf/cloud_io.hpp"
-#include "esf/esf_descriptor.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/io/cloud_io.hpp"
 
 namespace {
 

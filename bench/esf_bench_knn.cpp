@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "esf/esf_descriptor.hpp"
-#include "esf/knn_index.hpp"
-#include "esf/parallel.hpp"
-#include "knn_synthetic.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/recognition/knn_index.hpp"
+#include "recognition/knn_synthetic.hpp"
 
 namespace {
 

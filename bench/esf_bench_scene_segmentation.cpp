@@ -25,10 +25,10 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/segmentation.hpp"
-#include "esf/segmentation_evaluation.hpp"
-#include "png_writer.hpp"
+#include "esf/evaluation/segmentation_evaluation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/segmentation/segmentation.hpp"
+#include "io/png_writer.hpp"
 
 namespace {
 

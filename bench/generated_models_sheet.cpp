@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "esf/shape_generator.hpp"
+#include "esf/shapes/shape_generator.hpp"
 
 namespace {
 

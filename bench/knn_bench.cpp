@@ -10,10 +10,10 @@
 #include <utility>
 #include <vector>
 
-#include "esf/esf_descriptor.hpp"
-#include "esf/knn_index.hpp"
-#include "knn_kernels.hpp"
-#include "knn_synthetic.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/recognition/knn_index.hpp"
+#include "recognition/knn_kernels.hpp"
+#include "recognition/knn_synthetic.hpp"
 
 namespace {
 

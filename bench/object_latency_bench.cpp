@@ -21,11 +21,11 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/database.hpp"
-#include "esf/evaluation.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/training.hpp"
+#include "esf/evaluation/evaluation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
 
 namespace fs = std::filesystem;
 

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/mesh.hpp"
-#include "esf/render.hpp"
-#include "esf/view_sphere.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/render/render.hpp"
+#include "esf/render/view_sphere.hpp"
 
 namespace {
 

@@ -24,10 +24,10 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/database.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/segmentation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/segmentation/segmentation.hpp"
+#include "esf/training/database.hpp"
 
 namespace fs = std::filesystem;
 

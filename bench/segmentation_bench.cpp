@@ -27,9 +27,9 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/depth_image.hpp"
-#include "esf/segmentation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/io/depth_image.hpp"
+#include "esf/segmentation/segmentation.hpp"
 
 namespace {
 

@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "bench_data.hpp"
-#include "esf/database.hpp"
-#include "esf/esf_descriptor.hpp"
-#include "esf/mesh.hpp"
-#include "esf/parallel.hpp"
-#include "esf/render.hpp"
-#include "esf/training.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/render/render.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
 
 namespace {
 

@@ -4,9 +4,9 @@
 #include <cstdio>
 #include <exception>
 
-#include "esf/cloud_io.hpp"
-#include "esf/esf_descriptor.hpp"
-#include "esf/recognizer.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/recognition/recognizer.hpp"
 
 int main(int argc, char** argv) {
     if (argc != 3) {

@@ -3,8 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "esf/error.hpp"
-#include "esf/training.hpp"
+#include "esf/core/error.hpp"
+#include "esf/training/training.hpp"
 #include "fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <stdexcept>
 
-#include "esf/database.hpp"
-#include "esf/error.hpp"
+#include "esf/core/error.hpp"
+#include "esf/training/database.hpp"
 #include "fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "esf/depth_image.hpp"
-#include "esf/error.hpp"
+#include "esf/core/error.hpp"
+#include "esf/io/depth_image.hpp"
 #include "fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "esf/cloud_io.hpp"
-#include "esf/database.hpp"
-#include "esf/depth_image.hpp"
-#include "esf/mesh.hpp"
-#include "lzf.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/io/depth_image.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/training/database.hpp"
+#include "io/lzf.hpp"
 
 namespace {
 

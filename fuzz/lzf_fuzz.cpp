@@ -1,4 +1,4 @@
-// libFuzzer target: LZF decoding (src/lzf.cpp) of arbitrary bytes, by both copy loops. The input
+// libFuzzer target: LZF decoding (src/io/lzf.cpp) of arbitrary bytes, by both copy loops. The input
 // is a 4-byte output size (below 1 MiB), a byte whose lowest bit puts 8,224 bytes of literal
 // runs first (so that the AVX2 loop, which starts once 8192 bytes are out, runs on the rest), and
 // the LZF block. Both loops must give the same bytes, count and error, and stay in bounds (ASan,
@@ -9,7 +9,7 @@
 #include <cstring>
 #include <vector>
 
-#include "lzf.hpp"
+#include "io/lzf.hpp"
 
 namespace {
 

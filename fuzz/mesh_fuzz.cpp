@@ -8,9 +8,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "esf/error.hpp"
+#include "esf/core/error.hpp"
 #include "fuzz_input.hpp"
-#include "mesh_checks.hpp"
+#include "mesh/mesh_checks.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     if (size == 0) return 0;

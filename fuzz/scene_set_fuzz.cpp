@@ -5,8 +5,8 @@
 #include <sstream>
 #include <string>
 
-#include "esf/error.hpp"
-#include "esf/scene_evaluation.hpp"
+#include "esf/core/error.hpp"
+#include "esf/evaluation/scene_evaluation.hpp"
 #include "fuzz_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

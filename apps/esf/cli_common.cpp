@@ -7,8 +7,8 @@
 #include <limits>
 #include <string>
 
-#include "esf/database.hpp"
-#include "esf/parallel.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/training/database.hpp"
 
 namespace esf::cli {
 

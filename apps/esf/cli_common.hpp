@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "esf/training.hpp"
+#include "esf/training/training.hpp"
 
 namespace esf::cli {
 

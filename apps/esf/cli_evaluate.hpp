@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "esf/database.hpp"
-#include "esf/descriptor.hpp"
-#include "esf/esf_descriptor.hpp"
-#include "esf/evaluation.hpp"
-#include "esf/knn_index.hpp"
-#include "esf/training.hpp"
+#include "esf/descriptors/descriptor.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/evaluation/evaluation.hpp"
+#include "esf/recognition/knn_index.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
 
 namespace esf::cli {
 

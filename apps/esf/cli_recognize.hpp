@@ -9,7 +9,7 @@
 #include <string>
 
 #include "cli_common.hpp"
-#include "esf/recognizer.hpp"
+#include "esf/recognition/recognizer.hpp"
 
 namespace esf::cli {
 

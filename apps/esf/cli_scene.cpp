@@ -3,7 +3,7 @@
 #include <filesystem>
 
 #include "cli_common.hpp"
-#include "esf/cloud_io.hpp"
+#include "esf/io/cloud_io.hpp"
 
 namespace esf::cli {
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "esf/depth_image.hpp"
-#include "esf/point_cloud.hpp"
-#include "esf/segmentation.hpp"
+#include "esf/core/point_cloud.hpp"
+#include "esf/io/depth_image.hpp"
+#include "esf/segmentation/segmentation.hpp"
 
 namespace esf::cli {
 

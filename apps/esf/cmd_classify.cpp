@@ -12,9 +12,9 @@
 #include "cli_common.hpp"
 #include "cli_recognize.hpp"
 #include "commands.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/parallel.hpp"
-#include "esf/recognizer.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/recognition/recognizer.hpp"
 
 namespace esf::cli {
 

@@ -16,11 +16,11 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/database.hpp"
-#include "esf/descriptor.hpp"
-#include "esf/evaluation.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/training.hpp"
+#include "esf/descriptors/descriptor.hpp"
+#include "esf/evaluation/evaluation.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
 
 namespace esf::cli {
 

@@ -14,12 +14,12 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/demo.hpp"
-#include "esf/depth_image.hpp"
-#include "esf/report.hpp"
-#include "esf/scene_page.hpp"
-#include "esf/view_sphere.hpp"
+#include "esf/demo/demo.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/io/depth_image.hpp"
+#include "esf/render/view_sphere.hpp"
+#include "esf/report/report.hpp"
+#include "esf/report/scene_page.hpp"
 
 namespace esf::cli {
 

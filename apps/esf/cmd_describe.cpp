@@ -13,9 +13,9 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/esf_descriptor.hpp"
-#include "esf/parallel.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/io/cloud_io.hpp"
 
 namespace esf::cli {
 

@@ -14,12 +14,12 @@
 #include "cli_recognize.hpp"
 #include "cli_scene.hpp"
 #include "commands.hpp"
-#include "esf/evaluation.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/report.hpp"
-#include "esf/scene_evaluation.hpp"
-#include "esf/scene_report.hpp"
-#include "esf/view_pictures.hpp"
+#include "esf/evaluation/evaluation.hpp"
+#include "esf/evaluation/scene_evaluation.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/report/report.hpp"
+#include "esf/report/scene_report.hpp"
+#include "esf/report/view_pictures.hpp"
 
 namespace esf::cli {
 

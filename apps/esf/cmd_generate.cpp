@@ -12,7 +12,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/shape_generator.hpp"
+#include "esf/shapes/shape_generator.hpp"
 
 namespace esf::cli {
 

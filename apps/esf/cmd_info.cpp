@@ -9,7 +9,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/database.hpp"
+#include "esf/training/database.hpp"
 
 namespace esf::cli {
 

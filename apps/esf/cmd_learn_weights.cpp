@@ -16,10 +16,10 @@
 #include "cli_common.hpp"
 #include "cli_evaluate.hpp"
 #include "commands.hpp"
-#include "esf/database.hpp"
-#include "esf/descriptor.hpp"
-#include "esf/evaluation.hpp"
-#include "esf/weight_learning.hpp"
+#include "esf/descriptors/descriptor.hpp"
+#include "esf/evaluation/evaluation.hpp"
+#include "esf/evaluation/weight_learning.hpp"
+#include "esf/training/database.hpp"
 
 namespace esf::cli {
 

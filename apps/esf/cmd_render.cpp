@@ -16,10 +16,10 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/error.hpp"
-#include "esf/parallel.hpp"
-#include "esf/render.hpp"
+#include "esf/core/error.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/render/render.hpp"
 
 namespace esf::cli {
 

@@ -14,10 +14,10 @@
 #include "cli_recognize.hpp"
 #include "cli_scene.hpp"
 #include "commands.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/scene_page.hpp"
-#include "esf/segmentation.hpp"
-#include "esf/view_pictures.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/report/scene_page.hpp"
+#include "esf/report/view_pictures.hpp"
+#include "esf/segmentation/segmentation.hpp"
 
 namespace esf::cli {
 

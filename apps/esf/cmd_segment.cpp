@@ -14,10 +14,10 @@
 #include "cli_common.hpp"
 #include "cli_scene.hpp"
 #include "commands.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/depth_image.hpp"
-#include "esf/error.hpp"
-#include "esf/segmentation.hpp"
+#include "esf/core/error.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/io/depth_image.hpp"
+#include "esf/segmentation/segmentation.hpp"
 
 namespace esf::cli {
 

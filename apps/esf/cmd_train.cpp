@@ -11,9 +11,9 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/database.hpp"
-#include "esf/descriptor.hpp"
-#include "esf/training.hpp"
+#include "esf/descriptors/descriptor.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
 
 namespace esf::cli {
 

@@ -10,7 +10,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "esf/error.hpp"
+#include "esf/core/error.hpp"
 
 #if defined(__GLIBC__)
 #include <malloc.h>

@@ -21,19 +21,19 @@
 #include <utility>
 #include <vector>
 
-#include "esf/cloud_io.hpp"
-#include "esf/database.hpp"
-#include "esf/error.hpp"
-#include "esf/esf_descriptor.hpp"
-#include "esf/evaluation.hpp"
-#include "esf/mesh.hpp"
-#include "esf/parallel.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/render.hpp"
-#include "esf/report.hpp"
-#include "esf/segmentation.hpp"
-#include "esf/sensor_model.hpp"
-#include "esf/training.hpp"
+#include "esf/core/error.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/evaluation/evaluation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/render/render.hpp"
+#include "esf/render/sensor_model.hpp"
+#include "esf/report/report.hpp"
+#include "esf/segmentation/segmentation.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
 #include "points.hpp"
 
 namespace esf::python {

@@ -11,7 +11,7 @@
 #include <span>
 #include <string>
 
-#include "esf/point_cloud.hpp"
+#include "esf/core/point_cloud.hpp"
 
 namespace esf::python {
 

@@ -11,11 +11,11 @@
 #include <system_error>
 #include <utility>
 
-#include "atomic_file.hpp"
-#include "esf/cloud_io.hpp"
-#include "esf/error.hpp"
-#include "esf/mesh.hpp"
-#include "esf/parallel.hpp"
+#include "core/atomic_file.hpp"
+#include "esf/core/error.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/mesh/mesh.hpp"
 #include "evaluation/matrix_json.hpp"
 
 namespace esf {

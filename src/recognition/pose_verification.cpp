@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "splitmix64.hpp"
+#include "core/splitmix64.hpp"
 
 namespace esf {
 

@@ -14,10 +14,10 @@
 #include <string>
 #include <utility>
 
-#include "convex_hull_2d.hpp"
-#include "esf/render.hpp"
-#include "esf/view_sphere.hpp"
-#include "splitmix64.hpp"
+#include "core/convex_hull_2d.hpp"
+#include "core/splitmix64.hpp"
+#include "esf/render/render.hpp"
+#include "esf/render/view_sphere.hpp"
 
 namespace esf {
 

@@ -15,13 +15,13 @@
 #include <sstream>
 #include <string>
 
-#include "esf/cloud_io.hpp"
-#include "esf/database.hpp"
 #include "esf/evaluation/pose_accuracy.hpp"
-#include "esf/mesh.hpp"
-#include "esf/recognizer.hpp"
-#include "esf/scene_evaluation.hpp"
-#include "esf/scene_report.hpp"
+#include "esf/evaluation/scene_evaluation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/report/scene_report.hpp"
+#include "esf/training/database.hpp"
 #include "support/test_meshes.hpp"
 
 namespace fs = std::filesystem;

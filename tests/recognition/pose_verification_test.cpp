@@ -11,8 +11,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "esf/render.hpp"
-#include "esf/view_sphere.hpp"
+#include "esf/render/render.hpp"
+#include "esf/render/view_sphere.hpp"
 #include "support/test_meshes.hpp"
 
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "esf/mesh.hpp"
+#include "esf/mesh/mesh.hpp"
 
 namespace esf::test {
 

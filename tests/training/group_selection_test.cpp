@@ -10,8 +10,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "esf/mesh.hpp"
-#include "esf/training.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/training/training.hpp"
 
 namespace fs = std::filesystem;
 

@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "esf/render/clutter_scene.hpp"
-#include "esf/training.hpp"
+#include "esf/training/training.hpp"
 
 namespace esf {
 

@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 #include <span>
 
-#include "esf/point_cloud.hpp"
+#include "esf/core/point_cloud.hpp"
 
 namespace esf {
 

@@ -23,9 +23,9 @@
 #include <memory>
 #include <span>
 
-#include "esf/camera.hpp"
-#include "esf/mesh.hpp"
-#include "esf/point_cloud.hpp"
+#include "esf/core/camera.hpp"
+#include "esf/core/point_cloud.hpp"
+#include "esf/mesh/mesh.hpp"
 
 namespace esf {
 

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "esf/camera.hpp"
-#include "esf/mesh.hpp"
-#include "esf/point_cloud.hpp"
-#include "esf/sensor_model.hpp"
+#include "esf/core/camera.hpp"
+#include "esf/core/point_cloud.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/render/sensor_model.hpp"
 
 namespace esf {
 

@@ -1,0 +1,121 @@
+// Mesh: its bounding box, its checks and PLY output. Loading is mesh_load.cpp (the helper
+// process that imports) and mesh_import.cpp (the import itself).
+
+#include "esf/mesh/mesh.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "esf/core/error.hpp"
+
+namespace esf {
+
+Eigen::Vector3f Mesh::min_corner() const {
+    if (vertices.empty()) throw std::invalid_argument("min_corner: mesh has no vertex");
+    Eigen::Vector3f m = vertices.front();
+    for (const auto& v : vertices) m = m.cwiseMin(v);
+    return m;
+}
+
+Eigen::Vector3f Mesh::max_corner() const {
+    if (vertices.empty()) throw std::invalid_argument("max_corner: mesh has no vertex");
+    Eigen::Vector3f m = vertices.front();
+    for (const auto& v : vertices) m = m.cwiseMax(v);
+    return m;
+}
+
+double Mesh::bounding_radius() const {
+    const Eigen::Vector3d centre =
+        (min_corner().cast<double>() + max_corner().cast<double>()) / 2.0;
+    double radius = 0.0;
+    for (const auto& v : vertices) radius = std::max(radius, (v.cast<double>() - centre).norm());
+    return radius;
+}
+
+void check_mesh(const Mesh& mesh, const std::string& what) {
+    if (mesh.triangles.empty()) throw std::invalid_argument(what + ": mesh has no triangle");
+    if (mesh.vertices.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+        throw std::invalid_argument(what + ": too many vertices");
+    const int n = static_cast<int>(mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const Eigen::Vector3i& t = mesh.triangles[i];
+        if (t.minCoeff() < 0 || t.maxCoeff() >= n)
+            throw std::invalid_argument(what + ": triangle " + std::to_string(i) +
+                                        " has a vertex index outside [0, " + std::to_string(n) +
+                                        ")");
+    }
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        if (!mesh.vertices[i].allFinite())
+            throw std::invalid_argument(what + ": vertex " + std::to_string(i) + " is not finite");
+    }
+}
+
+void write_ply_mesh(const std::string& path, const Mesh& mesh) {
+    check_mesh(mesh, path);
+    std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by esf\n";
+    header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
+    header += "property float x\nproperty float y\nproperty float z\n";
+    header += "element face " + std::to_string(mesh.triangles.size()) + "\n";
+    header += "property list uchar int vertex_indices\nend_header\n";
+
+    std::vector<char> body;
+    body.reserve(mesh.vertices.size() * 12 + mesh.triangles.size() * 13);
+    const auto put = [&body](const void* data, std::size_t size) {
+        const char* bytes = static_cast<const char*>(data);
+        if constexpr (std::endian::native == std::endian::little) {
+            body.insert(body.end(), bytes, bytes + size);
+        } else {
+            for (std::size_t i = size; i-- > 0;) body.push_back(bytes[i]);
+        }
+    };
+    for (const auto& v : mesh.vertices) {
+        for (int k = 0; k < 3; ++k) put(&v[k], sizeof(float));
+    }
+    for (const auto& t : mesh.triangles) {
+        body.push_back(static_cast<char>(3));
+        for (int k = 0; k < 3; ++k) {
+            const std::int32_t index = t[k];
+            put(&index, sizeof(index));
+        }
+    }
+
+    std::string temp = path + ".XXXXXX";
+    const int fd = ::mkstemp(temp.data());
+    if (fd < 0)
+        throw IoError(file_message(path, 0, std::string("cannot create: ") + std::strerror(errno)));
+    bool ok = ::fchmod(fd, 0644) == 0;
+    const auto write_all = [fd](const char* data, std::size_t size) {
+        while (size > 0) {
+            const ssize_t n = ::write(fd, data, size);
+            if (n < 0) {
+                if (errno == EINTR) continue;
+                return false;
+            }
+            data += n;
+            size -= static_cast<std::size_t>(n);
+        }
+        return true;
+    };
+    ok = ok && write_all(header.data(), header.size()) && write_all(body.data(), body.size());
+    const int saved_errno = errno;
+    ok = (::close(fd) == 0) && ok;
+    if (!ok || std::rename(temp.c_str(), path.c_str()) != 0) {
+        const int error = ok ? errno : saved_errno;
+        ::unlink(temp.c_str());
+        throw IoError(file_message(path, 0, std::string("cannot write: ") + std::strerror(error)));
+    }
+}
+
+}  // namespace esf

@@ -1,0 +1,45 @@
+#pragma once
+// Distance kernels of the k-NN index (internal): portable C++ and, chosen at run time, AVX2 and
+// AVX-512BW versions. Compiled with -ffp-contract=off so that no multiply-add is fused.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "esf/recognition/knn_index.hpp"
+
+namespace esf::detail {
+
+/// Canonical weighted L1: lane i % 8 accumulates w_i * |a_i - b_i| (differences and products
+/// in double) in increasing i; the lanes are combined as ((l0+l4)+(l2+l6))+((l1+l5)+(l3+l7)).
+/// Every kernel returns bit-identical values.
+///
+/// `limit`: after every kExactCheck elements the lanes accumulated so far are combined the same
+/// way; when that partial sum exceeds `limit` the kernel stops and returns it. The terms are
+/// never negative and rounding to nearest is monotone, so the full distance is then larger than
+/// `limit` too; a returned value <= limit is the full distance, bit for bit. +infinity never
+/// stops.
+using ExactL1Fn = double (*)(const float* a, const float* b, const float* w, std::size_t n,
+                             double limit);
+
+/// Elements between two partial-sum checks of an exact kernel (a multiple of 8).
+inline constexpr std::size_t kExactCheck = 128;
+
+/// Lower bounds for `count` rows of `stride` bytes (a multiple of 16) starting at `rows`, with
+/// `weight` padded with zeros to a multiple of 8 lanes (of 8 bytes):
+///     bound[r] = (unit * S_r - row_error[r]) - query_error,
+///     S_r = sum over lanes l of weight[l] * sum_{j in l} |query_j - row_j|,
+/// S_r taken exactly in 64-bit integers (it must stay below 2^52), so that every kernel returns
+/// bit-identical values.
+using SketchFn = void (*)(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                          const std::uint8_t* query, const std::uint32_t* weight, double unit,
+                          const double* row_error, double query_error, double* bound);
+
+struct KnnKernels {
+    ExactL1Fn exact;
+    SketchFn sketch;
+};
+
+/// The kernels of `kernel` (kAuto resolves to knn_best_kernel()); the kernel must be supported.
+KnnKernels knn_kernels(KnnKernel kernel);
+
+}  // namespace esf::detail

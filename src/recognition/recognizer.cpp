@@ -1,0 +1,469 @@
+#include "esf/recognition/recognizer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <variant>
+
+#include "core/splitmix64.hpp"
+#include "esf/core/error.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/mesh/mesh.hpp"
+#include "esf/recognition/knn_index.hpp"
+#include "esf/training/descriptor_settings.hpp"
+#include "esf/training/training.hpp"
+#include "recognition/neighbour_merge.hpp"
+
+namespace esf {
+
+namespace {
+
+std::string joined(const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+    return out;
+}
+
+// ---- query descriptors ----------------------------------------------------------------------
+
+/// Describes query clouds; thread-safe.
+class Describer {
+  public:
+    virtual ~Describer() = default;
+    /// Signatures, row-major. Throws std::invalid_argument naming the descriptor.
+    virtual std::vector<float> describe(std::span<const Eigen::Vector3f> points) const = 0;
+};
+
+/// Seed of sampling s of a query: the database's seed for s = 0 (so one sampling describes a
+/// query as before), then seeds derived from it.
+std::uint64_t sampling_seed(std::uint64_t seed, int sampling) {
+    if (sampling == 0) return seed;
+    return detail::mix64(seed + detail::kGoldenGamma * static_cast<std::uint64_t>(sampling));
+}
+
+/// The database's descriptor (descriptor_settings.hpp); with several samplings, one descriptor
+/// per sampling seed and the mean of their signatures (single-signature descriptors).
+class SeededDescriber final : public Describer {
+  public:
+    SeededDescriber(const QuerySetup& setup, int samplings) {
+        const DescriptorSetup descriptor{setup.kind.name, setup.esf, setup.options};
+        const std::uint64_t seed =
+            descriptor_info(setup.kind.name).esf_options ? setup.esf.seed : setup.options.seed;
+        for (int s = 0; s < samplings; ++s)
+            descriptors_.push_back(make_descriptor(descriptor, sampling_seed(seed, s)));
+        if (samplings > 1 && descriptors_.front()->info().multi_signature)
+            throw std::invalid_argument(setup.kind.name +
+                                        ": several samplings need a single-signature descriptor");
+    }
+
+    std::vector<float> describe(std::span<const Eigen::Vector3f> points) const override {
+        const DescriptorInfo& info = descriptors_.front()->info();
+        const auto dim = static_cast<std::size_t>(info.dimension);
+        std::vector<double> sum;
+        std::vector<float> out;
+        for (const auto& descriptor : descriptors_) {
+            const std::vector<Signature> signatures = descriptor->compute(points);
+            if (signatures.empty()) throw std::invalid_argument(info.name + ": no signature");
+            for (const Signature& sig : signatures)
+                if (sig.size() != dim)
+                    throw std::invalid_argument(info.name + ": a signature of " +
+                                                std::to_string(sig.size()) + " floats, expected " +
+                                                std::to_string(dim));
+            if (descriptors_.size() == 1) {
+                out.reserve(signatures.size() * dim);
+                for (const Signature& sig : signatures)
+                    out.insert(out.end(), sig.begin(), sig.end());
+                return out;
+            }
+            sum.resize(dim, 0.0);
+            for (std::size_t i = 0; i < dim; ++i) sum[i] += signatures.front()[i];
+        }
+        out.resize(dim);
+        const double scale = 1.0 / static_cast<double>(descriptors_.size());
+        for (std::size_t i = 0; i < dim; ++i) out[i] = static_cast<float>(sum[i] * scale);
+        return out;
+    }
+
+  private:
+    std::vector<std::unique_ptr<GlobalDescriptor>> descriptors_;
+};
+
+std::unique_ptr<Describer> make_describer(const QuerySetup& setup, int samplings) {
+    return std::make_unique<SeededDescriber>(setup, samplings);
+}
+
+/// Merges the k nearest views of each query signature into the k nearest views of the query:
+/// a view's distance is its smallest over the signatures (ties: the lower row); one per model.
+std::vector<KnnNeighbour> merge_neighbours(const std::vector<KnnResult>& results, std::size_t k,
+                                           const KnnIndex& index) {
+    std::vector<KnnNeighbour> all;
+    for (const KnnResult& r : results)
+        all.insert(all.end(), r.neighbours.begin(), r.neighbours.end());
+    return detail::merge_signature_neighbours(std::move(all), k, index,
+                                              [](std::uint32_t) { return true; });
+}
+
+}  // namespace
+
+// ---- setup ----------------------------------------------------------------------------------
+
+int descriptor_version(const std::string& name) { return stored_descriptor_version(name); }
+
+QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind) {
+    const DescriptorSetup read = read_descriptor_setup(settings, kind);
+    QuerySetup setup;
+    setup.kind = kind;
+    setup.esf = read.esf;
+    setup.options = read.options;
+    return setup;
+}
+
+// ---- recognizer -----------------------------------------------------------------------------
+
+struct Recognizer::Impl {
+    RecognizerOptions options;
+    RecognizerInfo info;
+    std::unique_ptr<Describer> describer;
+    std::unique_ptr<Classifier> classifier;
+    std::size_t dimension = 0;
+    std::vector<ModelInfo> models;  // by model id (DescriptorMatrix::models)
+    // Verification: each model's sampled surface, loaded on first use.
+    mutable std::mutex surfaces_mutex;
+    mutable std::map<int, std::shared_ptr<const ModelSurface>> surfaces;
+
+    std::shared_ptr<const ModelSurface> surface(int model_id) const {
+        const std::lock_guard<std::mutex> lock(surfaces_mutex);
+        const auto it = surfaces.find(model_id);
+        if (it != surfaces.end()) return it->second;
+        const ModelInfo& m = models.at(static_cast<std::size_t>(model_id));
+        const std::string path =
+            (std::filesystem::path(options.verification_meshes) / m.file).string();
+        const Mesh mesh = load_mesh(path);
+        auto surface = std::make_shared<const ModelSurface>(sample_model_surface(
+            mesh, m.scale, options.verification.surface_points, model_seed(0, m.category, m.name)));
+        surfaces.emplace(model_id, surface);
+        return surface;
+    }
+};
+
+Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+    if (options.k == 0) throw std::invalid_argument("recognizer: k must be >= 1");
+    if (options.query_samplings < 1)
+        throw std::invalid_argument("recognizer: query samplings must be >= 1, got " +
+                                    std::to_string(options.query_samplings));
+    resolve_threads(options.threads);
+    if (!options.verification_meshes.empty()) {
+        validate(options.verification);
+        if (!std::filesystem::is_directory(options.verification_meshes))
+            throw IoError(file_message(options.verification_meshes, 0,
+                                       "not a folder (verification needs the training meshes)"));
+    }
+    impl_->options = options;
+    auto fail = [&](const std::string& reason) {
+        throw std::invalid_argument(file_message(path, 0, reason));
+    };
+
+    const Database db(path, OpenMode::kRead);
+    const std::vector<DescriptorKind> kinds = db.descriptor_kinds();
+    if (kinds.empty()) fail("empty database: no descriptors (train it first with esf train)");
+    DescriptorKind kind;
+    if (options.descriptor.empty()) {
+        if (kinds.size() > 1) {
+            std::vector<std::string> names;
+            for (const auto& k : kinds) names.push_back(k.name);
+            fail("the database holds several descriptors (" + joined(names) + "); choose one");
+        }
+        kind = kinds.front();
+    } else {
+        const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const DescriptorKind& k) {
+            return k.name == options.descriptor;
+        });
+        if (it == kinds.end()) fail("the database holds no " + options.descriptor + " descriptors");
+        kind = *it;
+    }
+    try {
+        impl_->info.setup = query_setup(db.settings(), kind);
+    } catch (const std::invalid_argument& e) {
+        fail(e.what());
+    }
+    impl_->describer = make_describer(impl_->info.setup, options.query_samplings);
+
+    DescriptorMatrix matrix = db.load_descriptors(kind.name);
+    if (matrix.rows() == 0)
+        fail("empty database: no views with " + kind.name + " descriptors (" +
+             std::to_string(matrix.models.size()) + " complete models)");
+    const auto dim = static_cast<std::size_t>(kind.dimension);
+    impl_->dimension = dim;
+
+    KnnIndexOptions index_options;
+    index_options.threads = options.threads;
+    index_options.sketch_group = descriptor_sketch_group(kind.name);
+    if (options.use_weights) {
+        if (const auto weights = db.weights(kind.name)) {
+            try {
+                index_options.weights =
+                    descriptor_dimension_weights(descriptor_info(kind.name), *weights);
+            } catch (const std::invalid_argument& e) {
+                fail(e.what());
+            }
+            impl_->info.weighted = true;
+        }
+    }
+
+    // One index view per (model, view index); consecutive rows of a view are its signatures.
+    std::vector<std::uint32_t> row_views(matrix.rows());
+    std::vector<ViewLabel> labels;
+    bool grouped = false;
+    for (std::size_t r = 0; r < matrix.rows(); ++r) {
+        const DescriptorRow& row = matrix.row_info[r];
+        const bool same_view = r > 0 && matrix.row_info[r - 1].model == row.model &&
+                               matrix.row_info[r - 1].view_index == row.view_index;
+        if (same_view) {
+            grouped = true;
+        } else {
+            ViewLabel label;
+            label.class_name = matrix.categories[row.category];
+            label.class_id = static_cast<int>(row.category);
+            label.model_name = matrix.models[row.model].name;
+            label.model_id = static_cast<int>(row.model);
+            label.view = row.view_index;
+            label.pose = row.pose;
+            labels.push_back(std::move(label));
+        }
+        row_views[r] = static_cast<std::uint32_t>(labels.size() - 1);
+    }
+    if (options.one_view_per_model) {
+        // Models numbered densely in view order (the matrix holds a model's views together).
+        index_options.view_families.reserve(labels.size());
+        std::uint32_t family = 0;
+        for (std::size_t v = 0; v < labels.size(); ++v) {
+            if (v > 0 && labels[v].model_id != labels[v - 1].model_id) ++family;
+            index_options.view_families.push_back(family);
+        }
+    }
+    KnnIndex index = grouped ? KnnIndex(matrix.data, dim, row_views, index_options)
+                             : KnnIndex(matrix.data, dim, index_options);
+    impl_->info.database = path;
+    impl_->info.views = labels.size();
+    impl_->info.rows = matrix.rows();
+    impl_->info.models = matrix.models.size();
+    impl_->info.categories = matrix.categories;
+    impl_->models = matrix.models;
+    ClassifierOptions classifier_options;
+    classifier_options.k = options.k;
+    classifier_options.vote = options.vote;
+    impl_->classifier =
+        std::make_unique<Classifier>(std::move(index), std::move(labels), classifier_options);
+}
+
+Recognizer::~Recognizer() = default;
+Recognizer::Recognizer(Recognizer&&) noexcept = default;
+Recognizer& Recognizer::operator=(Recognizer&&) noexcept = default;
+
+const RecognizerInfo& Recognizer::info() const { return impl_->info; }
+const RecognizerOptions& Recognizer::options() const { return impl_->options; }
+const Classifier& Recognizer::classifier() const { return *impl_->classifier; }
+
+QueryDescriptor Recognizer::describe(std::span<const Eigen::Vector3f> points) const {
+    QueryDescriptor out;
+    out.points = points.size();
+    try {
+        out.signatures = impl_->describer->describe(points);
+    } catch (const std::exception& e) {  // a bad cloud; never fatal to a batch or a scene
+        out.signatures.clear();
+        out.error = e.what();
+    }
+    return out;
+}
+
+std::vector<QueryDescriptor> Recognizer::describe_batch(std::span<const Points> clouds) const {
+    std::vector<QueryDescriptor> out(clouds.size());
+    parallel_for(clouds.size(), impl_->options.threads,
+                 [&](std::size_t i) { out[i] = describe(clouds[i]); });
+    return out;
+}
+
+Classification Recognizer::classify_descriptor(std::span<const float> signatures) const {
+    const std::size_t dim = impl_->dimension;
+    if (signatures.empty() || signatures.size() % dim != 0)
+        throw std::invalid_argument(
+            "recognizer: a descriptor of " + std::to_string(signatures.size()) +
+            " floats is not one or more signatures of " + std::to_string(dim));
+    const Classifier& classifier = *impl_->classifier;
+    if (signatures.size() == dim) return classifier.classify(signatures);
+    std::vector<KnnResult> results;
+    for (std::size_t s = 0; s < signatures.size(); s += dim)
+        results.push_back(classifier.index().search(signatures.subspan(s, dim), impl_->options.k));
+    const std::vector<KnnNeighbour> neighbours =
+        merge_neighbours(results, impl_->options.k, classifier.index());
+    return classify_neighbours(neighbours, classifier.labels(), classifier.options().vote);
+}
+
+std::vector<CloudClassification> Recognizer::classify_batch(
+    std::span<const QueryDescriptor> descriptors) const {
+    std::vector<CloudClassification> out(descriptors.size());
+    // Single signatures go to the classifier as one batch; multi-signature queries one by one.
+    const std::size_t dim = impl_->dimension;
+    std::vector<float> batch;
+    std::vector<std::size_t> batch_items, other_items;
+    for (std::size_t i = 0; i < descriptors.size(); ++i) {
+        const QueryDescriptor& d = descriptors[i];
+        if (!d.ok()) {
+            out[i].error = d.error;
+        } else if (d.signatures.size() == dim) {
+            batch.insert(batch.end(), d.signatures.begin(), d.signatures.end());
+            batch_items.push_back(i);
+        } else {
+            other_items.push_back(i);
+        }
+    }
+    if (!batch_items.empty()) {
+        std::vector<Classification> results =
+            impl_->classifier->classify_batch(batch, impl_->options.threads);
+        for (std::size_t j = 0; j < batch_items.size(); ++j)
+            out[batch_items[j]].classification = std::move(results[j]);
+    }
+    parallel_for(other_items.size(), impl_->options.threads, [&](std::size_t j) {
+        const std::size_t i = other_items[j];
+        try {
+            out[i].classification = classify_descriptor(descriptors[i].signatures);
+        } catch (const std::invalid_argument& e) {
+            out[i].error = e.what();
+        }
+    });
+    return out;
+}
+
+Classification Recognizer::classify(std::span<const Eigen::Vector3f> points) const {
+    const QueryDescriptor d = describe(points);
+    if (!d.ok()) throw std::invalid_argument(d.error);
+    Classification c = classify_descriptor(d.signatures);
+    if (verifies()) {
+        const Points finite = drop_non_finite(points).points;
+        verify(c, Observation{finite, nullptr});
+    }
+    return c;
+}
+
+std::vector<CloudClassification> Recognizer::classify_batch(std::span<const Points> clouds) const {
+    std::vector<CloudClassification> out = classify_batch(describe_batch(clouds));
+    if (verifies())
+        parallel_for(out.size(), impl_->options.threads, [&](std::size_t i) {
+            if (!out[i].ok()) return;
+            const Points finite = drop_non_finite(clouds[i]).points;
+            verify(out[i].classification, Observation{finite, nullptr});
+        });
+    return out;
+}
+
+bool Recognizer::verifies() const { return !impl_->options.verification_meshes.empty(); }
+
+void Recognizer::verify(Classification& c, const Observation& observation) const {
+    if (!verifies() || c.neighbours.empty()) return;
+    const VerificationOptions& o = impl_->options.verification;
+    std::vector<std::size_t> picks;
+    std::vector<int> models;
+    for (std::size_t i = 0; i < c.neighbours.size() && picks.size() < o.candidates; ++i) {
+        if (!o.decide_class && c.neighbours[i].class_name != c.class_name) continue;
+        const int model = c.neighbours[i].model_id;
+        if (std::find(models.begin(), models.end(), model) != models.end()) continue;
+        models.push_back(model);
+        picks.push_back(i);
+    }
+    if (picks.empty()) return;
+    const PreparedObservation prepared(observation, o.camera);
+    std::vector<PoseFit> fits;
+    for (const std::size_t i : picks) {
+        // A model the database rescaled (not metric in its catalog) has a guessed size.
+        const int model = c.neighbours[i].model_id;
+        const bool guessed = impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;
+        fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
+                                 prepared, o, guessed));
+    }
+    std::size_t best = 0;
+    for (std::size_t j = 1; j < fits.size(); ++j)
+        if (fits[j].fit.score() > fits[best].fit.score()) best = j;
+
+    // The best fit first, the other neighbours in their order.
+    const std::size_t chosen = picks[best];
+    std::rotate(c.neighbours.begin(), c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen),
+                c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen) + 1);
+    const NeighbourView& n = c.neighbours.front();
+    adopt_neighbour(c, n);
+    const double scale = impl_->models.at(static_cast<std::size_t>(n.model_id)).scale;
+    Eigen::Matrix4d scaled = fits[best].model_to_camera;
+    scaled.topLeftCorner<3, 3>() *= scale;
+    c.pose = scaled.cast<float>();
+    c.fit = fits[best].fit;
+    c.verified = fits[best].verified;
+    std::size_t same = 0;
+    for (const NeighbourView& v : c.neighbours) same += v.class_name == c.class_name;
+    c.confidence = static_cast<double>(same) / static_cast<double>(c.neighbours.size());
+    const auto vote = std::find_if(c.votes.begin(), c.votes.end(), [&](const ClassVote& v) {
+        return v.class_name == c.class_name;
+    });
+    if (vote != c.votes.end()) std::rotate(c.votes.begin(), vote, vote + 1);
+}
+
+SceneRecognition Recognizer::recognize(SegmentationResult segmentation) const {
+    SceneRecognition out = recognize_unverified(std::move(segmentation));
+    if (verifies()) verify_objects(out, nullptr);
+    return out;
+}
+
+SceneRecognition Recognizer::recognize_unverified(SegmentationResult segmentation) const {
+    SceneRecognition out;
+    out.plane_found = segmentation.plane_found;
+    out.plane = segmentation.plane;
+    out.plane_inliers = segmentation.plane_inliers;
+    out.finite_points = segmentation.finite_points;
+    out.message = std::move(segmentation.message);
+    std::vector<Cluster>& clusters = segmentation.clusters;
+    std::vector<QueryDescriptor> descriptors(clusters.size());
+    parallel_for(clusters.size(), impl_->options.threads,
+                 [&](std::size_t i) { descriptors[i] = describe(clusters[i].points); });
+    std::vector<CloudClassification> classes = classify_batch(descriptors);
+    out.objects.resize(clusters.size());
+    for (std::size_t i = 0; i < clusters.size(); ++i) {
+        out.objects[i].cluster = std::move(clusters[i]);
+        out.objects[i].classification = std::move(classes[i].classification);
+        out.objects[i].error = std::move(classes[i].error);
+    }
+    return out;
+}
+
+SceneRecognition Recognizer::recognize_scene(const PointCloud& scene,
+                                             const SegmentationOptions& options) const {
+    return recognize(segment_scene(scene, options), scene);
+}
+
+SceneRecognition Recognizer::recognize(SegmentationResult segmentation,
+                                       const PointCloud& scene) const {
+    SceneRecognition out = recognize_unverified(std::move(segmentation));
+    if (verifies()) {
+        // The frame is the free-space witness when it is what the camera model describes.
+        const CameraIntrinsics& camera = impl_->options.verification.camera;
+        const bool framed = scene.width == static_cast<std::uint32_t>(camera.width) &&
+                            scene.height == static_cast<std::uint32_t>(camera.height);
+        verify_objects(out, framed ? &scene : nullptr);
+    }
+    return out;
+}
+
+void Recognizer::verify_objects(SceneRecognition& scene, const PointCloud* frame) const {
+    parallel_for(scene.objects.size(), impl_->options.threads, [&](std::size_t i) {
+        RecognizedObject& object = scene.objects[i];
+        if (!object.classified() || object.cluster.points.size() < 3) return;
+        verify(object.classification, Observation{object.cluster.points, frame});
+    });
+}
+
+}  // namespace esf

@@ -1,0 +1,189 @@
+#include "esf/report/scene_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <system_error>
+
+#include "core/atomic_file.hpp"
+#include "esf/core/error.hpp"
+#include "evaluation/matrix_json.hpp"
+#include "report/markup.hpp"
+
+namespace esf {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using detail::xml_escape;
+
+std::string percent(double fraction) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.1f %%", 100.0 * fraction);
+    return buffer;
+}
+
+std::string share(std::size_t a, std::size_t b) {
+    return b ? percent(static_cast<double>(a) / static_cast<double>(b)) : "-";
+}
+
+void object_rows(std::ostringstream& html, const SceneEvaluationReport& report, bool failed_only) {
+    html << "<table><tr><th>scene</th><th>type</th><th>object</th><th>points</th>"
+            "<th>outcome</th><th>coverage</th><th>purity</th><th>parts</th><th>class</th>"
+            "<th>named</th></tr>\n";
+    for (const SceneObjectOutcome& o : report.objects) {
+        const bool found = o.segmentation.outcome == SegmentOutcome::kFound;
+        if (failed_only && o.correct) continue;
+        html << "<tr class=\""
+             << (o.correct ? "ok"
+                 : found   ? "named"
+                           : "seg")
+             << "\"><td>" << xml_escape(fs::path(o.scene).filename().string()) << "</td><td>"
+             << xml_escape(o.type) << "</td><td>" << o.segmentation.object_id << "</td><td>"
+             << o.segmentation.points << "</td><td>" << to_string(o.segmentation.outcome)
+             << "</td><td>" << percent(o.segmentation.coverage) << "</td><td>"
+             << percent(o.segmentation.purity) << "</td><td>" << o.segmentation.parts << "</td><td>"
+             << xml_escape(o.true_class.empty() ? "-" : o.true_class) << "</td><td>"
+             << xml_escape(o.predicted_class.empty() ? "-" : o.predicted_class) << "</td></tr>\n";
+    }
+    html << "</table>\n";
+}
+
+}  // namespace
+
+namespace {
+
+nlohmann::json pose_or_null(const std::optional<Eigen::Matrix4f>& pose) {
+    return pose ? detail::row_major_json(*pose) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+std::string scene_report_json(const SceneEvaluationReport& report) {
+    nlohmann::json out;
+    out["scene_set"] = report.scene_set;
+    out["database"] = report.database;
+    out["grouping"] = report.grouping;
+    out["truth"] = report.truth.empty() ? nlohmann::json(nullptr) : nlohmann::json(report.truth);
+    out["types"] = nlohmann::json::array();
+    for (const SceneTypeSummary& t : report.types)
+        out["types"].push_back({{"type", t.type},
+                                {"scenes", t.scenes},
+                                {"objects", t.objects},
+                                {"found", t.found},
+                                {"split", t.split},
+                                {"merged", t.merged},
+                                {"missed", t.missed},
+                                {"found_rate", t.found_rate()},
+                                {"clusters", t.clusters},
+                                {"background_clusters", t.background_clusters},
+                                {"shared_clusters", t.shared_clusters},
+                                {"labelled", t.labelled},
+                                {"correct", t.correct},
+                                {"end_to_end", t.end_to_end()},
+                                {"posed", t.posed},
+                                {"pose_correct", t.pose_correct},
+                                {"pose_rate", t.pose_rate()}});
+    out["objects"] = nlohmann::json::array();
+    for (const SceneObjectOutcome& o : report.objects)
+        out["objects"].push_back(
+            {{"scene", o.scene},
+             {"type", o.type},
+             {"object_id", o.segmentation.object_id},
+             {"points", o.segmentation.points},
+             {"outcome", to_string(o.segmentation.outcome)},
+             {"coverage", o.segmentation.coverage},
+             {"purity", o.segmentation.purity},
+             {"parts", o.segmentation.parts},
+             {"class", o.true_class},
+             {"predicted", o.predicted_class},
+             {"correct", o.correct},
+             {"model", o.predicted_model.empty() ? nlohmann::json(nullptr)
+                                                 : nlohmann::json(o.predicted_model)},
+             {"pose", pose_or_null(o.pose)},
+             {"add_s", o.pose_judged && std::isfinite(o.add_s) ? nlohmann::json(o.add_s)
+                                                               : nlohmann::json(nullptr)},
+             {"pose_judged", o.pose_judged},
+             {"pose_correct", o.pose_correct}});
+    out["failures"] = nlohmann::json::array();
+    for (const SceneFailure& f : report.failures)
+        out["failures"].push_back({{"file", f.file}, {"error", f.error}});
+    out["timings"] = {{"segment_ms_per_frame", report.segment_ms},
+                      {"recognize_ms_per_frame", report.recognize_ms}};
+    return out.dump(2) + "\n";
+}
+
+std::string scene_report_html(const SceneEvaluationReport& report, const std::string& title) {
+    std::ostringstream html;
+    html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>"
+         << xml_escape(title)
+         << "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:70em}"
+            "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;"
+            "padding:2px 8px;text-align:right}th{background:#eee}td:first-child,"
+            "th:first-child{text-align:left}tr.seg td{background:#fde0dc}tr.named "
+            "td{background:#fff4d6}</style></head><body>\n<h1>"
+         << xml_escape(title) << "</h1>\n<p>Scene set " << xml_escape(report.scene_set)
+         << (report.database.empty() ? "" : ", database " + xml_escape(report.database))
+         << ", grouping " << xml_escape(report.grouping)
+         << ". Found: one cluster holds at least 80 % of the object and is at least 80 % that "
+            "object; end to end: found and named right.</p>\n";
+    const bool poses = !report.truth.empty();
+    html << "<table><tr><th>scene type</th><th>scenes</th><th>objects</th><th>found</th>"
+            "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
+            "<th>one cluster</th><th>end to end</th>"
+         << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th>" : "") << "</tr>\n";
+    for (const SceneTypeSummary& t : report.types) {
+        html << "<tr><td>" << xml_escape(t.type) << "</td><td>" << t.scenes << "</td><td>"
+             << t.objects << "</td><td>" << t.found << "</td><td>" << t.split << "</td><td>"
+             << t.merged << "</td><td>" << t.missed << "</td><td>" << t.shared_clusters
+             << "</td><td>" << share(t.found, t.objects) << "</td><td>"
+             << share(t.correct, t.labelled) << "</td>";
+        if (poses)
+            html << "<td>" << t.posed << "</td><td>" << share(t.pose_correct, t.posed) << "</td>";
+        html << "</tr>\n";
+    }
+    html << "</table>\n";
+    if (poses)
+        html << "<p>Poses: objects at least half visible whose model the database "
+                "holds, against truth.json (meshes under "
+             << xml_escape(report.truth)
+             << "); ADD-S: mean distance from the model under the true pose to the model under "
+                "the found one, as a share of its diameter.</p>\n";
+    char timing[160];
+    std::snprintf(timing, sizeof timing,
+                  "<p>Segmentation %.2f ms, description and classification %.2f ms "
+                  "per frame.</p>\n",
+                  report.segment_ms, report.recognize_ms);
+    html << timing;
+    for (const SceneFailure& f : report.failures)
+        html << "<p class=\"failure\">Not evaluated: " << xml_escape(f.file) << ": "
+             << xml_escape(f.error) << "</p>\n";
+    html << "<h2>Objects not found or not named right</h2>\n";
+    object_rows(html, report, true);
+    html << "<h2>All objects</h2>\n";
+    object_rows(html, report, false);
+    html << "</body></html>\n";
+    return html.str();
+}
+
+SceneReportFiles write_scene_report(const std::string& dir, const SceneEvaluationReport& report,
+                                    const std::string& title) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir))
+        throw IoError(file_message(dir, 0, "cannot create the report folder"));
+    SceneReportFiles files;
+    files.json = (fs::path(dir) / "scenes.json").string();
+    files.html = (fs::path(dir) / "index.html").string();
+    const std::string json = scene_report_json(report);
+    const std::string html = scene_report_html(report, title);
+    detail::write_file_atomically(files.json, json.data(), json.size());
+    detail::write_file_atomically(files.html, html.data(), html.size());
+    return files;
+}
+
+}  // namespace esf

@@ -1,0 +1,375 @@
+#include "esf/segmentation/segmentation.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#include "core/convex_hull_2d.hpp"
+#include "core/pixel_rows.hpp"
+#include "esf/core/parallel.hpp"
+#include "segmentation/container_parts.hpp"
+#include "segmentation/euclidean_clusters.hpp"
+#include "segmentation/occluded_parts.hpp"
+#include "segmentation/plane_fit.hpp"
+
+namespace esf {
+
+namespace {
+
+// Fixed work split (independent of the thread count), so reductions add up in the same order.
+constexpr std::size_t kChunks = 64;
+// Pixels from the image border within which a cluster may be cut off.
+constexpr std::uint32_t kBorderMargin = 2;
+
+std::string format_metres(double value) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.3g m", value);
+    return buffer;
+}
+
+std::size_t chunk_begin(std::size_t chunk, std::size_t count) { return chunk * count / kChunks; }
+
+using detail::convex_hull;
+using detail::ConvexRegion;
+using detail::min_area_rectangle;
+using detail::monotone_chain;
+using detail::Octagon;
+using detail::Rectangle;
+using detail::Vec2;
+using Hypothesis = detail::PlaneHypothesis;
+using detail::ransac_plane;
+using detail::refit_plane;
+
+// ---------------------------------------------------------------------------------------------
+
+/// Orthonormal basis (u, w) of the plane with u x w = normal.
+std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& normal) {
+    const Eigen::Vector3f helper =
+        std::abs(normal.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
+    const Eigen::Vector3f u = normal.cross(helper).normalized();
+    const Eigen::Vector3f w = normal.cross(u);
+    return {u, w};
+}
+
+SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_t width,
+                           std::uint32_t height, const SegmentationOptions& options) {
+    validate(options);
+    if (points.empty()) throw std::invalid_argument("segment_scene: the cloud is empty");
+    if (points.size() > std::numeric_limits<std::uint32_t>::max())
+        throw std::invalid_argument("segment_scene: more than 2^32 - 1 points");
+    const bool organised = height > 1 && static_cast<std::size_t>(width) * height == points.size();
+
+    std::vector<std::uint32_t> finite;
+    finite.reserve(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (points[i].allFinite()) finite.push_back(static_cast<std::uint32_t>(i));
+    if (finite.empty())
+        throw std::invalid_argument("segment_scene: the cloud has no finite points (" +
+                                    std::to_string(points.size()) + " points, all NaN or inf)");
+
+    SegmentationResult result;
+    result.finite_points = finite.size();
+
+    // 1. RANSAC on an even subsample.
+    const std::size_t sample_count = std::min(finite.size(), options.plane_samples);
+    std::vector<Eigen::Vector3f> samples(sample_count);
+    for (std::size_t i = 0; i < sample_count; ++i)
+        samples[i] = points[finite[i * finite.size() / sample_count]];
+    const Hypothesis best = ransac_plane(samples, options);
+    if (best.inliers == 0) {
+        result.message = "no dominant plane: fewer than 3 non-collinear points";
+        return result;
+    }
+
+    // 2. Least-squares refit to the sampled inliers; orient to the viewpoint.
+    Plane plane{best.normal, best.d};
+    plane = refit_plane(samples, plane, options.plane_distance);
+    if (plane.height(options.viewpoint) < 0.0f) {
+        plane.normal = -plane.normal;
+        plane.d = -plane.d;
+    }
+    result.plane = plane;
+
+    // 3./4. One pass: table points (projected, for the hull) and object candidates. In an
+    // organised frame the table's hull needs only each image row's first and last table pixel:
+    // the table lies in front of the camera, so the projection from the plane to the image
+    // keeps convexity, and a pixel between two table pixels of its row is never a hull vertex.
+    const auto [u, w] = plane_basis(plane.normal);
+    struct Part {
+        std::size_t table_points = 0;
+        std::vector<Vec2> table;
+        Octagon octagon;
+        std::vector<Vec2> outside;
+        std::vector<std::uint32_t> candidates;
+    };
+    std::vector<Part> parts(kChunks);
+    parallel_for(kChunks, options.threads, [&](std::size_t c) {
+        Part& part = parts[c];
+        std::uint32_t row = std::numeric_limits<std::uint32_t>::max();
+        std::uint32_t first = 0, last = 0;
+        std::size_t row_end = 0;  // first index after `row`
+        auto close_row = [&] {
+            if (row == std::numeric_limits<std::uint32_t>::max()) return;
+            part.outside.emplace_back(u.dot(points[first]), w.dot(points[first]));
+            if (last != first) part.outside.emplace_back(u.dot(points[last]), w.dot(points[last]));
+        };
+        for (std::size_t k = chunk_begin(c, finite.size()); k < chunk_begin(c + 1, finite.size());
+             ++k) {
+            const Eigen::Vector3f& p = points[finite[k]];
+            const float h = plane.height(p);
+            if (std::abs(h) <= options.plane_distance) {
+                ++part.table_points;
+                if (organised) {
+                    if (finite[k] >= row_end) {  // a new row (indices ascend): divide only here
+                        close_row();
+                        row = finite[k] / width;
+                        row_end = (static_cast<std::size_t>(row) + 1) * width;
+                        first = finite[k];
+                    }
+                    last = finite[k];
+                } else {
+                    part.table.emplace_back(u.dot(p), w.dot(p));
+                    part.octagon.add(part.table.back());
+                }
+            }
+            if (h > options.min_height && h <= options.max_height)
+                part.candidates.push_back(finite[k]);
+        }
+        close_row();
+    });
+    Octagon octagon;
+    for (const Part& part : parts) {
+        result.plane_inliers += part.table_points;
+        octagon.merge(part.octagon);
+    }
+    const double needed_points =
+        std::max(static_cast<double>(options.min_plane_points),
+                 options.min_plane_fraction * static_cast<double>(finite.size()));
+    if (static_cast<double>(result.plane_inliers) < needed_points) {
+        result.message = "no dominant plane: the best plane holds " +
+                         std::to_string(result.plane_inliers) + " of " +
+                         std::to_string(finite.size()) + " finite points (needs " +
+                         std::to_string(static_cast<std::size_t>(std::ceil(needed_points))) + ")";
+        return result;
+    }
+    if (!organised)
+        parallel_for(kChunks, options.threads, [&](std::size_t c) {
+            octagon.append_outside(parts[c].table, parts[c].outside);
+        });
+    std::vector<Vec2> hull_candidates;
+    std::vector<std::uint32_t> candidates;
+    for (Part& part : parts) {
+        hull_candidates.insert(hull_candidates.end(), part.outside.begin(), part.outside.end());
+        candidates.insert(candidates.end(), part.candidates.begin(), part.candidates.end());
+        part = Part{};
+    }
+    const std::vector<Vec2> hull = monotone_chain(std::move(hull_candidates));
+    if (hull.size() < 3) {
+        result.message = "no dominant plane: the plane's points are collinear";
+        return result;
+    }
+    result.plane_found = true;
+
+    // Keep the candidates whose projection lies inside the hull (the polygonal prism).
+    const ConvexRegion table(hull);
+    std::vector<std::uint8_t> keep(candidates.size());
+    parallel_for(kChunks, options.threads, [&](std::size_t c) {
+        for (std::size_t k = chunk_begin(c, candidates.size());
+             k < chunk_begin(c + 1, candidates.size()); ++k) {
+            const Eigen::Vector3f& p = points[candidates[k]];
+            keep[k] = table.contains(Vec2(u.dot(p), w.dot(p))) ? 1 : 0;
+        }
+    });
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < candidates.size(); ++k)
+        if (keep[k]) candidates[kept++] = candidates[k];
+    candidates.resize(kept);
+
+    auto no_objects = [&](const std::string& why) {
+        result.message = "no objects above the plane: " + why;
+        return result;
+    };
+    if (candidates.empty())
+        return no_objects("no points between " + format_metres(options.min_height) + " and " +
+                          format_metres(options.max_height) + " above it inside its hull");
+
+    // 5. Grouping of the candidates.
+    std::vector<Eigen::Vector3f> candidate_points(candidates.size());
+    for (std::size_t k = 0; k < candidates.size(); ++k) candidate_points[k] = points[candidates[k]];
+    std::vector<std::uint32_t> component;
+    if (options.grouping == Grouping::kConvexity) {
+        SurfacePatchOptions patch_options = options.patches;
+        patch_options.viewpoint = options.viewpoint;
+        const PatchGraph graph =
+            organised ? image_patches(points, width, height, candidates, patch_options)
+                      : voxel_patches(points, candidates, patch_options);
+        const std::vector<std::uint32_t> segment = convex_segments(graph, options.convexity);
+        component.resize(candidates.size());
+        for (std::size_t k = 0; k < candidates.size(); ++k)
+            component[k] = segment[graph.patch_of[k]];
+        if (organised && options.join_occluded_parts)
+            detail::join_occluded_parts(points, width, height, candidates, component,
+                                        options.viewpoint, plane.normal, plane.d);
+        if (options.join_container_parts)
+            detail::join_container_parts(candidate_points, component, plane.normal, plane.d);
+    } else {
+        for (const std::uint32_t i : candidates)
+            if (!detail::fits_clustering_grid(points[i], options.cluster_tolerance))
+                throw std::invalid_argument(
+                    "segment_scene: coordinates too large for the clustering grid (point " +
+                    std::to_string(i) +
+                    "; at most 2^20 cells of cluster_tolerance / sqrt(3) from "
+                    "the origin per axis)");
+        component = detail::euclidean_components(candidate_points, options.cluster_tolerance);
+    }
+
+    // 6. Clusters within the size limits.
+    const std::uint32_t component_count = *std::max_element(component.begin(), component.end()) + 1;
+    std::vector<std::size_t> component_points(component_count, 0);
+    for (const std::uint32_t c : component) ++component_points[c];
+    constexpr std::uint32_t kDropped = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> cluster_of(component_count, kDropped);
+    std::uint32_t cluster_count = 0;
+    for (std::uint32_t c = 0; c < component_count; ++c)
+        if (component_points[c] >= options.min_cluster_points &&
+            component_points[c] <= options.max_cluster_points)
+            cluster_of[c] = cluster_count++;
+    if (cluster_count == 0) {
+        const std::size_t largest =
+            *std::max_element(component_points.begin(), component_points.end());
+        return no_objects(std::to_string(candidates.size()) + " points above it form " +
+                          std::to_string(component_count) + " groups, the largest of " +
+                          std::to_string(largest) + " points (clusters need " +
+                          std::to_string(options.min_cluster_points) + " to " +
+                          std::to_string(options.max_cluster_points) + ")");
+    }
+    std::vector<Cluster> clusters(cluster_count);
+    for (std::uint32_t c = 0; c < component_count; ++c)
+        if (cluster_of[c] != kDropped) {
+            clusters[cluster_of[c]].indices.reserve(component_points[c]);
+            clusters[cluster_of[c]].points.reserve(component_points[c]);
+        }
+    for (std::size_t k = 0; k < candidates.size(); ++k) {
+        const std::uint32_t cluster = cluster_of[component[k]];
+        if (cluster == kDropped) continue;
+        clusters[cluster].indices.push_back(candidates[k]);
+        clusters[cluster].points.push_back(candidate_points[k]);
+    }
+
+    parallel_for(clusters.size(), options.threads, [&](std::size_t c) {
+        Cluster& cluster = clusters[c];
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        float top = -std::numeric_limits<float>::infinity();
+        std::vector<Vec2> projected;
+        projected.reserve(cluster.points.size());
+        for (const Eigen::Vector3f& p : cluster.points) {
+            sum += p.cast<double>();
+            top = std::max(top, plane.height(p));
+            projected.emplace_back(u.dot(p), w.dot(p));
+        }
+        cluster.centroid = (sum / static_cast<double>(cluster.points.size())).cast<float>();
+        const Rectangle box = min_area_rectangle(convex_hull(projected));
+        cluster.size = Eigen::Vector3f(box.length, box.width, top);
+        cluster.length_axis = (box.length_axis.x() * u + box.length_axis.y() * w).normalized();
+
+        std::string why;
+        if (organised) {
+            detail::PixelRows rows(width);
+            for (const std::uint32_t i : cluster.indices) {
+                rows.seek(i);
+                const std::uint32_t row = rows.row(), col = rows.col();
+                if (row < kBorderMargin || col < kBorderMargin || row + kBorderMargin >= height ||
+                    col + kBorderMargin >= width) {
+                    why = "touches the image border";
+                    break;
+                }
+            }
+        }
+        if (top >= options.max_height - options.cluster_tolerance) {
+            if (!why.empty()) why += "; ";
+            why += "reaches the height limit of " + format_metres(options.max_height);
+        }
+        if (!why.empty()) {
+            cluster.status = ClusterStatus::kMaybeTruncated;
+            cluster.message = "may be cut off: " + why;
+        }
+    });
+
+    std::sort(clusters.begin(), clusters.end(), [](const Cluster& a, const Cluster& b) {
+        if (a.points.size() != b.points.size()) return a.points.size() > b.points.size();
+        for (int k = 0; k < 3; ++k)
+            if (a.centroid[k] != b.centroid[k]) return a.centroid[k] < b.centroid[k];
+        return a.indices.front() < b.indices.front();
+    });
+    result.clusters = std::move(clusters);
+    result.message = std::to_string(result.clusters.size()) +
+                     (result.clusters.size() == 1 ? " object" : " objects") + " above the plane";
+    return result;
+}
+
+}  // namespace
+
+void validate(const SegmentationOptions& o) {
+    auto fail = [](const std::string& what) {
+        throw std::invalid_argument("segmentation options: " + what);
+    };
+    auto positive = [&](float value, const char* name) {
+        if (!(value > 0.0f) || !std::isfinite(value))
+            fail(std::string(name) + " must be a positive length in metres, got " +
+                 std::to_string(value));
+    };
+    positive(o.plane_distance, "plane_distance");
+    positive(o.cluster_tolerance, "cluster_tolerance");
+    positive(o.max_height, "max_height");
+    if (o.plane_iterations < 1)
+        fail("plane_iterations must be >= 1, got " + std::to_string(o.plane_iterations));
+    if (o.plane_samples < 3)
+        fail("plane_samples must be >= 3, got " + std::to_string(o.plane_samples));
+    if (!(o.plane_confidence > 0.0 && o.plane_confidence < 1.0))
+        fail("plane_confidence must be in (0, 1), got " + std::to_string(o.plane_confidence));
+    if (!(o.min_plane_fraction >= 0.0 && o.min_plane_fraction <= 1.0))
+        fail("min_plane_fraction must be in [0, 1], got " + std::to_string(o.min_plane_fraction));
+    if (!std::isfinite(o.min_height) || o.min_height < 0.0f || o.min_height >= o.max_height)
+        fail("min_height must be >= 0 and below max_height (" + std::to_string(o.max_height) +
+             "), got " + std::to_string(o.min_height));
+    if (o.min_cluster_points < 1) fail("min_cluster_points must be >= 1");
+    if (o.max_cluster_points < o.min_cluster_points)
+        fail("max_cluster_points (" + std::to_string(o.max_cluster_points) +
+             ") is below min_cluster_points (" + std::to_string(o.min_cluster_points) + ")");
+    if (!o.viewpoint.allFinite()) fail("viewpoint must be finite");
+    if (o.threads < 0)
+        fail("threads must be >= 0 (0 = all cores), got " + std::to_string(o.threads));
+    if (o.grouping != Grouping::kConvexity && o.grouping != Grouping::kEuclidean)
+        fail("unknown grouping");
+    SurfacePatchOptions patches = o.patches;
+    patches.viewpoint = o.viewpoint;
+    validate(patches);
+    validate(o.convexity);
+}
+
+SegmentationResult segment_scene(const PointCloud& cloud, const SegmentationOptions& options) {
+    return segment(cloud.points, cloud.width, cloud.height, options);
+}
+
+SegmentationResult segment_scene(std::span<const Eigen::Vector3f> points,
+                                 const SegmentationOptions& options) {
+    return segment(points, static_cast<std::uint32_t>(points.size()), 1, options);
+}
+
+const char* to_string(ClusterStatus status) {
+    switch (status) {
+        case ClusterStatus::kOk:
+            return "ok";
+        case ClusterStatus::kMaybeTruncated:
+            return "maybe_truncated";
+    }
+    return "unknown";
+}
+
+}  // namespace esf
