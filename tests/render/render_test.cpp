@@ -14,7 +14,6 @@
 
 #include "esf/render/view_sphere.hpp"
 #include "support/error_of.hpp"
-#include "support/test_data.hpp"
 
 namespace {
 
@@ -604,28 +603,6 @@ TEST(Render, ErrorsSayWhatIsWrong) {
                   esf::render_scene({&bad_object, 1}, Eigen::Isometry3d::Identity(), {});
               }),
               "scene object 0: triangle 3 has a vertex index outside [0, 8)");
-}
-
-TEST(RenderRealData, KitAndYcbMeshesGiveEveryView) {
-    ESF_REQUIRE_DATA("meshes/bottle/kit_BathDetergent.obj");
-    ESF_REQUIRE_DATA("meshes/can/ycb_005_tomato_soup_can.ply");
-    // KIT: half the triangles face inwards, 45 mm middle side; rescaled to 0.2 m.
-    const esf::Mesh kit =
-        esf::load_mesh(esf::test::data_file("meshes/bottle/kit_BathDetergent.obj").string());
-    esf::RenderOptions options;
-    options.target_extent = 0.2;
-    const auto kit_views = esf::render_views(kit, options);
-    ASSERT_EQ(kit_views.size(), 80u);
-    for (const auto& view : kit_views) EXPECT_GT(view.points.size(), 5000u) << view.index;
-
-    const esf::Mesh can =
-        esf::load_mesh(esf::test::data_file("meshes/can/ycb_005_tomato_soup_can.ply").string());
-    options = {};
-    options.level = 0;
-    options.camera = esf::CameraIntrinsics::pcl_renderer();
-    const auto can_views = esf::render_views(can, options);
-    ASSERT_EQ(can_views.size(), 20u);
-    for (const auto& view : can_views) EXPECT_GT(view.points.size(), 500u) << view.index;
 }
 
 }  // namespace
