@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <stdexcept>
@@ -473,11 +474,82 @@ TEST(VfhDescriptor, PlaneFacingTheSensor) {
     for (int bin = 135; bin < 180; ++bin) EXPECT_EQ(s[bin], 0.0f) << bin;
 }
 
+/// Fraction of a square's area within distance rho * (half diagonal) of its centre.
+double square_distance_cdf(double rho) {
+    const double r = std::min(rho, 1.0) * std::sqrt(2.0);  // half side 1
+    if (r <= 1.0) return std::numbers::pi * r * r / 4.0;
+    const double x0 = std::sqrt(r * r - 1.0);  // quarter square: columns below x0 are full
+    return x0 + r * r / 2.0 * (std::asin(1.0 / r) - std::asin(x0 / r));
+}
+
 TEST(CvfhDescriptor, OneSignaturePerSmoothRegion) {
     ESF_REQUIRE_BASELINES();
-    EXPECT_EQ(esf::make_descriptor("cvfh")->compute(facing_square()).size(), 1u);
-    EXPECT_EQ(esf::make_descriptor("cvfh")->compute(cube_corner()).size(), 3u);
+    const auto cvfh = esf::make_descriptor("cvfh");
+    const auto square = cvfh->compute(facing_square());
+    EXPECT_EQ(square.size(), 1u);
+    EXPECT_EQ(cvfh->compute(cube_corner()).size(), 3u);
     EXPECT_GE(esf::make_descriptor("our-cvfh")->compute(cube_corner()).size(), 3u);
+
+    // The square's one region, by hand (see VfhDescriptor.PlaneFacingTheSensor): every normal
+    // is the region's, so the three angle features are 0 (bins 22, 67, 112). CVFH hands VFH the
+    // region's centroid with w = 0, so the direction to the sensor is (0, 0, -1) itself and every
+    // viewpoint cosine is 1: the last bin, 180 + 127. CVFH fills the distance block (135..179) with
+    // the distances to the region's centroid over the largest: a square's distribution. Each of the
+    // five blocks holds 100 (N / (N - 1) for the four of PCL's pair features) of the L1 total.
+    esf::DescriptorOptions raw;  // the grid itself, no voxel grid
+    raw.leaf_factor = 0.0f;
+    raw.remove_outliers = false;
+    for (const bool voxel_grid : {true, false}) {
+        const auto s = esf::make_descriptor("cvfh", voxel_grid ? esf::DescriptorOptions{} : raw)
+                           ->compute(facing_square());
+        ASSERT_EQ(s.size(), 1u);
+        for (int bin = 0; bin < 308; ++bin) {
+            if (bin >= 135 && bin < 180) continue;
+            const bool full = bin == 22 || bin == 67 || bin == 112 || bin == 307;
+            EXPECT_NEAR(s[0][static_cast<std::size_t>(bin)], full ? 0.2 : 0.0, 1e-3) << bin;
+        }
+        // Without the voxel grid the prepared points are the grid itself: its distances to the
+        // centre, binned as PCL does (floor(45 d / largest), the largest in the last bin).
+        const Points grid = facing_square();
+        std::vector<double> expected(45, 0.0);
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+        for (const auto& p : grid) centre += p.cast<double>() / static_cast<double>(grid.size());
+        double largest = 0.0;
+        for (const auto& p : grid) largest = std::max(largest, (p.cast<double>() - centre).norm());
+        for (const auto& p : grid) {
+            const auto k =
+                std::min(44.0, std::floor(45.0 * (p.cast<double>() - centre).norm() / largest));
+            expected[static_cast<std::size_t>(k)] += 0.2 / static_cast<double>(grid.size());
+        }
+        double to_grid = 0.0, to_square = 0.0, distance_sum = 0.0;
+        for (int k = 0; k < 45; ++k) {
+            const double value = s[0][static_cast<std::size_t>(135 + k)];
+            to_grid += std::abs(value - expected[static_cast<std::size_t>(k)]);
+            to_square += std::abs(value - 0.2 * (square_distance_cdf((k + 1) / 45.0) -
+                                                 square_distance_cdf(k / 45.0)));
+            distance_sum += value;
+        }
+        EXPECT_NEAR(distance_sum, 0.2, 1e-3);
+        if (voxel_grid) {
+            EXPECT_LT(to_square, 0.06);  // 31 x 31 voxel centroids against the continuous square
+        } else {
+            EXPECT_LT(to_grid, 2e-3);  // a few points on bin borders, in float
+        }
+    }
+    // Turning the square about the optical axis changes nothing.
+    const auto turned = esf::make_descriptor("cvfh", raw)
+                            ->compute(rotated_about_optical_axis(facing_square(), 40.0f));
+    ASSERT_EQ(turned.size(), 1u);
+    EXPECT_LT(l1(turned[0], esf::make_descriptor("cvfh", raw)->compute(facing_square())[0]), 0.02);
+
+    // The cube corner is symmetric under turns of 120 degrees about the optical axis, which
+    // carry each face onto the next: the three regions' signatures agree, and none is a plane's.
+    const auto corner = esf::make_descriptor("cvfh", raw)->compute(cube_corner());
+    ASSERT_EQ(corner.size(), 3u);
+    EXPECT_LT(l1(corner[0], corner[1]), 0.03);
+    EXPECT_LT(l1(corner[0], corner[2]), 0.03);
+    EXPECT_LT(l1(corner[1], corner[2]), 0.03);
+    for (const auto& region : corner) EXPECT_GT(l1(region, square[0]), 0.3);
 }
 
 TEST(PclBaselines, PreprocessingOptions) {
