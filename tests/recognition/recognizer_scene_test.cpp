@@ -1,0 +1,172 @@
+// The recognizer on scenes: synthetic ones with two objects or none, clusters it cannot
+// describe, and a real scene.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "esf/core/error.hpp"
+#include "esf/core/parallel.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/recognition/knn_index.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/training/database.hpp"
+#include "esf/training/training.hpp"
+#include "support/error_of.hpp"
+#include "support/recognizer_fixture.hpp"
+#include "support/test_data.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using esf::test::kHeldOut;
+using esf::test::kSamples;
+using esf::test::kShapes;
+using esf::test::RecognizerTest;
+using esf::test::temp_dir;
+
+// ---- scenes ---------------------------------------------------------------------------------
+
+TEST_F(RecognizerTest, SyntheticSceneWithTwoObjects) {
+    // The mug and the bowl on a table (world z up), seen from 0.9 m at 35 degrees elevation.
+    const esf::Mesh& mug = meshes_["mug"];
+    const esf::Mesh& bowl = meshes_["bowl"];
+    Eigen::Isometry3d mug_pose = Eigen::Isometry3d::Identity();
+    mug_pose.translation() = Eigen::Vector3d(0.0, 0.15, 0.0);
+    Eigen::Isometry3d bowl_pose = Eigen::Isometry3d::Identity();
+    bowl_pose.translation() = Eigen::Vector3d(0.05, -0.15, 0.0);
+    const std::vector<esf::SceneObject> objects = {{&mug, mug_pose}, {&bowl, bowl_pose}};
+    esf::SceneOptions scene_options;
+    scene_options.table_plane = true;
+    scene_options.table_half_size = 0.6;
+    scene_options.noise = esf::SensorNoise::kKinect;
+    scene_options.seed = 3;
+    const Eigen::Isometry3d camera = esf::look_at({0.75, 0.1, 0.5}, {0, 0, 0.05});
+    const esf::PointCloud scene = esf::render_scene(objects, camera, scene_options);
+
+    for (const int threads : {1, 2}) {
+        esf::RecognizerOptions options;
+        options.threads = threads;
+        const esf::Recognizer recognizer(db_path_, options);
+        esf::SegmentationOptions segmentation;
+        segmentation.threads = threads;
+        // The objects stand apart; convexity grouping cuts the mug's handle off at its joints.
+        segmentation.grouping = esf::Grouping::kEuclidean;
+        const esf::SceneRecognition result = recognizer.recognize_scene(scene, segmentation);
+        EXPECT_TRUE(result.plane_found);
+        ASSERT_EQ(result.objects.size(), 2u) << result.message;
+        for (const esf::RecognizedObject& o : result.objects) {
+            ASSERT_TRUE(o.classified()) << o.error;
+            // The object's world position tells which it is.
+            const Eigen::Vector3d world = camera.inverse() * o.cluster.centroid.cast<double>();
+            const std::string truth = world.y() > 0 ? "mug" : "bowl";
+            EXPECT_EQ(o.classification.class_name, truth) << "centroid " << world.transpose();
+            EXPECT_EQ(o.classification.neighbours.size(),
+                      std::min<std::size_t>(10, recognizer.info().models));
+            EXPECT_GT(o.cluster.points.size(), 300u);
+        }
+    }
+}
+
+/// A 1 m x 1 m table at z = 1 (camera frame, facing the camera) sampled every 5 mm.
+esf::Points table_points() {
+    esf::Points table;
+    for (int i = 0; i < 200; ++i)
+        for (int j = 0; j < 200; ++j)
+            table.push_back({-0.5f + 0.005f * float(i), -0.5f + 0.005f * float(j), 1.0f});
+    return table;
+}
+
+TEST_F(RecognizerTest, ClustersThatCannotBeDescribedAreReportedPerObject) {
+    esf::Points scene = table_points();
+    // A solid block 5 cm above the table (towards the camera: smaller z)...
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j)
+            for (int k = 0; k < 10; ++k)
+                scene.push_back(
+                    {0.2f + 0.005f * float(i), 0.005f * float(j), 0.95f - 0.005f * float(k)});
+    // ...two isolated points far from everything...
+    scene.push_back({-0.3f, -0.3f, 0.9f});
+    scene.push_back({-0.3f, -0.3f, 0.905f});
+    // ...and a thin straight wire: one line.
+    for (int k = 0; k < 40; ++k) scene.push_back({-0.3f, 0.3f, 0.98f - 0.004f * float(k)});
+    esf::SegmentationOptions segmentation;
+    segmentation.min_cluster_points = 1;
+    segmentation.grouping = esf::Grouping::kEuclidean;  // a solid block: no surface to patch
+    const esf::Recognizer recognizer(db_path_);
+    const esf::SceneRecognition result = recognizer.recognize_scene(
+        esf::PointCloud{scene, static_cast<std::uint32_t>(scene.size()), 1, {}, {}}, segmentation);
+    ASSERT_TRUE(result.plane_found);
+    ASSERT_EQ(result.objects.size(), 3u) << result.message;
+    EXPECT_EQ(result.objects[0].cluster.points.size(), 1000u);
+    EXPECT_TRUE(result.objects[0].classified()) << result.objects[0].error;
+    EXPECT_EQ(result.objects[1].cluster.points.size(), 40u);
+    EXPECT_FALSE(result.objects[1].classified());
+    EXPECT_CONTAINS(result.objects[1].error, "esf: ");
+    EXPECT_EQ(result.objects[2].cluster.points.size(), 2u);
+    EXPECT_FALSE(result.objects[2].classified());
+    EXPECT_CONTAINS(result.objects[2].error, "esf: needs at least 3 finite points, got 2");
+}
+
+TEST_F(RecognizerTest, SceneWithoutPlaneOrObjectsSaysSo) {
+    const esf::Recognizer recognizer(db_path_);
+    esf::Points table = table_points();
+    const esf::SceneRecognition empty = recognizer.recognize_scene(
+        esf::PointCloud{table, static_cast<std::uint32_t>(table.size()), 1, {}, {}});
+    EXPECT_TRUE(empty.plane_found);
+    EXPECT_TRUE(empty.objects.empty());
+    EXPECT_CONTAINS(empty.message, "no objects");
+
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    esf::Points cloud;
+    for (int i = 0; i < 5000; ++i) cloud.push_back({u(rng), u(rng), 2.0f + u(rng)});
+    const esf::SceneRecognition none = recognizer.recognize_scene(
+        esf::PointCloud{cloud, static_cast<std::uint32_t>(cloud.size()), 1, {}, {}});
+    EXPECT_FALSE(none.plane_found);
+    EXPECT_TRUE(none.objects.empty());
+    EXPECT_CONTAINS(none.message, "no dominant plane");
+}
+
+TEST_F(RecognizerTest, RealSceneObjectsAreSegmentedAndClassified) {
+    ESF_REQUIRE_DATA("real/scenes/mosd_learn0.pcd");
+    const esf::PointCloud scene =
+        esf::read_cloud(esf::test::data_file("real/scenes/mosd_learn0.pcd").string());
+    ASSERT_EQ(scene.labels.size(), scene.points.size());
+    // Labelled objects: label / 10 >= 2 is object label / 10 - 1.
+    std::map<std::uint32_t, std::size_t> labelled;
+    for (const std::uint32_t l : scene.labels)
+        if (l >= 20) ++labelled[l / 10];
+    ASSERT_FALSE(labelled.empty());
+
+    const esf::Recognizer recognizer(db_path_);
+    const esf::SceneRecognition result = recognizer.recognize_scene(scene);
+    ASSERT_TRUE(result.plane_found) << result.message;
+    // Every cluster has a class, and most of every labelled object of a fair size lies in one
+    // cluster (two touching objects may share one).
+    std::map<std::uint32_t, std::size_t> most;  // object -> its points in its best cluster
+    for (const esf::RecognizedObject& o : result.objects) {
+        EXPECT_TRUE(o.classified()) << o.error;
+        EXPECT_TRUE(o.classification.class_name == "mug" || o.classification.class_name == "bowl");
+        std::map<std::uint32_t, std::size_t> inside;
+        for (const std::uint32_t i : o.cluster.indices) ++inside[scene.labels[i] / 10];
+        for (const auto& [object, n] : inside) most[object] = std::max(most[object], n);
+    }
+    for (const auto& [object, points] : labelled)
+        if (points >= 2000) {
+            EXPECT_GE(2 * most[object], points) << "object " << object;
+        }
+}
+
+}  // namespace
