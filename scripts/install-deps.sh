@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages esf builds against, when any is missing (chromium: the
-# browser test of the report pages, ctest browser_pages). With the argument `fuzz`, also
+# Installs the Debian 12 packages esf builds against, when any is missing (libfreenect: esf
+# live and its tests under fakenect; chromium: the browser test of the report pages, ctest
+# browser_pages). With the argument `fuzz`, also
 # Debian's clang 16 and its libFuzzer (for make fuzz).
 set -euo pipefail
 packages=(
@@ -8,6 +9,7 @@ packages=(
     libeigen3-dev libpcl-dev libflann-dev libassimp-dev libembree-dev libtbb-dev
     libcli11-dev libsqlite3-dev libpng-dev libfmt-dev nlohmann-json3-dev libnanoflann-dev
     libgtest-dev libgmock-dev libbenchmark-dev
+    libfreenect-dev libfreenect-bin
     python3-dev pybind11-dev python3-numpy python3-pytest python3-venv
     chromium
 )

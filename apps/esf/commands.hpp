@@ -20,6 +20,8 @@ void add_compare_command(CLI::App& app);
 void add_eval_command(CLI::App& app);
 void add_learn_weights_command(CLI::App& app);
 void add_generate_scenes_command(CLI::App& app);
+void add_live_command(CLI::App& app);
+void add_record_scenes_command(CLI::App& app);
 // @commands: one declaration per command above this line
 
 }  // namespace esf::cli

@@ -71,6 +71,8 @@ int main(int argc, char** argv) {
     esf::cli::add_eval_command(app);
     esf::cli::add_learn_weights_command(app);
     esf::cli::add_generate_scenes_command(app);
+    esf::cli::add_live_command(app);
+    esf::cli::add_record_scenes_command(app);
     // @commands: one add_<name>_command(app) call per command above this line
     try {
         app.parse(argc, argv);
