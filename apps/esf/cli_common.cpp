@@ -12,34 +12,6 @@
 
 namespace esf::cli {
 
-CLI::Validator thread_limit() {
-    return CLI::Validator(
-        [](std::string& value) -> std::string {
-            int threads = 0;
-            try {
-                std::size_t used = 0;
-                threads = std::stoi(value, &used);
-                if (used != value.size()) throw std::invalid_argument(value);
-            } catch (const std::out_of_range&) {
-                threads = std::numeric_limits<int>::max();  // a huge count: capped below
-                if (!value.empty() && value[0] == '-') return "must be >= 0 (0 = all cores)";
-            } catch (const std::invalid_argument&) {
-                return "not a whole number of threads";
-            }
-            if (threads < 0) return "must be >= 0 (0 = all cores), got " + value;
-            if (threads <= esf::kThreadsWithinAnyLimit) return {};
-            const int limit = esf::max_threads();
-            if (threads > limit) {
-                std::fprintf(
-                    stderr, "esf: warning: --threads %s is above 4 x the %d cores; using %d\n",
-                    value.size() > 12 ? "(a huge count)" : value.c_str(), limit / 4, limit);
-                value = std::to_string(limit);
-            }
-            return {};
-        },
-        "THREADS", "thread_limit");
-}
-
 void warn_if_weights_stale(const std::string& database, const std::string& descriptor) {
     const Database db(database, OpenMode::kRead);
     if (db.weights_are_stale(descriptor))
@@ -47,17 +19,6 @@ void warn_if_weights_stale(const std::string& database, const std::string& descr
                      "esf: warning: %s: the learned weights predate the database's last "
                      "training and are ignored; run esf learn-weights again\n",
                      database.c_str());
-}
-
-CLI::Validator non_negative_seed() {
-    return CLI::Validator(
-        [](std::string& value) -> std::string {
-            const std::size_t first = value.find_first_not_of(" \t");
-            if (first != std::string::npos && value[first] == '-')
-                return "seed must be a non-negative integer, got " + value;
-            return {};
-        },
-        "SEED", "non_negative_seed");
 }
 
 namespace {
@@ -102,6 +63,47 @@ void Progress::finish() {
 
 namespace {
 
+/// For --threads: see add_threads_option().
+CLI::Validator thread_limit() {
+    return CLI::Validator(
+        [](std::string& value) -> std::string {
+            int threads = 0;
+            try {
+                std::size_t used = 0;
+                threads = std::stoi(value, &used);
+                if (used != value.size()) throw std::invalid_argument(value);
+            } catch (const std::out_of_range&) {
+                threads = std::numeric_limits<int>::max();  // a huge count: capped below
+                if (!value.empty() && value[0] == '-') return "must be >= 0 (0 = all cores)";
+            } catch (const std::invalid_argument&) {
+                return "not a whole number of threads";
+            }
+            if (threads < 0) return "must be >= 0 (0 = all cores), got " + value;
+            if (threads <= esf::kThreadsWithinAnyLimit) return {};
+            const int limit = esf::max_threads();
+            if (threads > limit) {
+                std::fprintf(
+                    stderr, "esf: warning: --threads %s is above 4 x the %d cores; using %d\n",
+                    value.size() > 12 ? "(a huge count)" : value.c_str(), limit / 4, limit);
+                value = std::to_string(limit);
+            }
+            return {};
+        },
+        "THREADS", "thread_limit");
+}
+
+/// For --seed: see add_seed_option().
+CLI::Validator non_negative_seed() {
+    return CLI::Validator(
+        [](std::string& value) -> std::string {
+            const std::size_t first = value.find_first_not_of(" \t");
+            if (first != std::string::npos && value[first] == '-')
+                return "seed must be a non-negative integer, got " + value;
+            return {};
+        },
+        "SEED", "non_negative_seed");
+}
+
 CLI::Validator fold_text() {
     return CLI::Validator(
         [](std::string& text) -> std::string {
@@ -117,6 +119,13 @@ CLI::Validator fold_text() {
 }
 
 }  // namespace
+
+CLI::App* add_command(CLI::App& app, const std::string& name, const std::string& summary,
+                      const std::string& details) {
+    CLI::App* cmd = app.add_subcommand(name, summary);
+    cmd->footer(details);
+    return cmd;
+}
 
 CLI::Option* add_threads_option(CLI::App& cmd, int& threads) {
     return cmd.add_option("--threads", threads, "Worker threads, 0 = all cores")

@@ -18,7 +18,6 @@ struct RecognizerArgs {
     RecognizerOptions options;
     bool no_weights = false;
     bool every_view = false;
-    std::string vote = "nearest";
 };
 
 /// --verify ROOT and --candidates N: hypothesis verification with the training meshes.
@@ -52,19 +51,14 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
     cmd.add_flag("--every-view", args.every_view,
                  "The k nearest views vote, several of one model among them (default: one view "
                  "per model)");
-    cmd.add_option("--vote", args.vote,
-                   "How the neighbours name the class: nearest (the nearest one's class; the "
-                   "others give the confidence) or majority")
-        ->check(CLI::IsMember({"nearest", "majority"}))
-        ->capture_default_str();
+    add_enum_option(cmd, "--vote", args.options.vote,
+                    "How the neighbours name the class: nearest (the nearest one's class; the "
+                    "others give the confidence) or majority");
     cmd.add_option("--samplings", args.options.query_samplings,
                    "Describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
-    cmd.add_option("--threads", args.options.threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_threads_option(cmd, args.options.threads);
     add_verification_options(cmd, args.options);
 }
 
@@ -72,7 +66,6 @@ inline RecognizerOptions recognizer_options(const RecognizerArgs& args) {
     RecognizerOptions options = args.options;
     options.use_weights = !args.no_weights;
     options.one_view_per_model = !args.every_view;
-    options.vote = parse_vote_rule(args.vote);
     return options;
 }
 

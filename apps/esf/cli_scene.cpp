@@ -7,18 +7,6 @@
 
 namespace esf::cli {
 
-void add_grouping_option(CLI::App& cmd, Grouping& grouping, const std::string& help) {
-    cmd.add_option_function<std::string>(
-           "--grouping",
-           [&grouping](const std::string& value) {
-               grouping = value == "euclidean" ? Grouping::kEuclidean : Grouping::kConvexity;
-           },
-           help)
-        ->check(CLI::IsMember({"convexity", "euclidean"}))
-        ->type_name("convexity|euclidean")
-        ->default_str("convexity");
-}
-
 void add_depth_png_options(CLI::App& cmd, SceneInputArgs& args) {
     cmd.add_flag("--depth-png", args.depth_png,
                  "Read scenes as 16-bit depth PNGs (implied by the .png extension)");
@@ -60,11 +48,11 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
                    "Sensor position x y z in the cloud's frame (m); its side of the plane is up")
         ->expected(3)
         ->capture_default_str();
-    add_grouping_option(cmd, o.grouping,
-                        "How points above the table become objects: convexity (surface patches "
-                        "joined where the surface is convex; splits touching, stacked and leaning "
-                        "objects at the creases between them) or euclidean (all that touches is "
-                        "one)");
+    add_enum_option(cmd, "--grouping", o.grouping,
+                    "How points above the table become objects: convexity (surface patches "
+                    "joined where the surface is convex; splits touching, stacked and leaning "
+                    "objects at the creases between them) or euclidean (all that touches is "
+                    "one)");
     cmd.add_option("--concavity-tolerance", o.convexity.concavity_tolerance_deg,
                    "Convexity grouping: neighbouring patches whose normals differ by less than "
                    "this join even where the surface is concave (degrees)")
@@ -84,9 +72,7 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
     cmd.add_option("--max-cluster-points", o.max_cluster_points,
                    "Larger clusters are dropped (points)")
         ->capture_default_str();
-    cmd.add_option("--seed", o.seed, "RANSAC seed")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
+    add_seed_option(cmd, o.seed, "RANSAC seed");
 }
 
 SegmentationOptions segmentation_options(const SceneInputArgs& args) {

@@ -21,9 +21,6 @@ struct SceneInputArgs {
     std::vector<float> viewpoint = {0.0f, 0.0f, 0.0f};
 };
 
-/// --grouping convexity|euclidean into `grouping` (which must outlive `cmd`).
-void add_grouping_option(CLI::App& cmd, Grouping& grouping, const std::string& help);
-
 /// --depth-png, --fx, --fy, --cx, --cy, --depth-scale. `args` must outlive `cmd`.
 void add_depth_png_options(CLI::App& cmd, SceneInputArgs& args);
 

@@ -108,8 +108,8 @@ void run_classify(const ClassifyArgs& args) {
 
 void add_classify_command(CLI::App& app) {
     auto args = std::make_shared<ClassifyArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "classify",
+    CLI::App* cmd = add_command(
+        app, "classify", "Classify object clouds against a training database",
         "Classify object clouds (one object per file, e.g. the clusters of esf segment) against\n"
         "a training database: each cloud is described with the database's descriptor and\n"
         "settings, its k nearest views (L1) vote, and the table shows the winning class, its\n"

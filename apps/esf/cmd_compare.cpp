@@ -248,8 +248,8 @@ void add_compare_command(CLI::App& app) {
     auto args = std::make_shared<CompareArgs>();
     std::string names;
     for (const auto& n : descriptor_names()) names += (names.empty() ? "" : ",") + n;
-    CLI::App* cmd = app.add_subcommand(
-        "compare",
+    CLI::App* cmd = add_command(
+        app, "compare", "Compare descriptors: train and evaluate each on identical data",
         "Compare descriptors on identical data: for each descriptor, train a database of ROOT in\n"
         "the work folder (DIR/<descriptor>.sqlite, resumed or reused when it exists; the same\n"
         "views, seeds and sensor noise for every descriptor), evaluate it on the labelled real\n"
@@ -282,13 +282,8 @@ void add_compare_command(CLI::App& app) {
     cmd->add_option("--max-queries", args->max_queries,
                     "Synthetic queries: at most this many views, evenly spaced (0 = all)")
         ->capture_default_str();
-    cmd->add_option("--seed", args->seed, "Training seed (sensor noise, descriptor sampling)")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_seed_option(*cmd, args->seed, "Training seed (sensor noise, descriptor sampling)");
+    add_threads_option(*cmd, args->threads);
     cmd->add_flag("--json", args->json, "Print the comparison as one JSON object");
     cmd->callback([args] { run_compare(*args); });
 }

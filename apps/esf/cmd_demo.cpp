@@ -343,8 +343,8 @@ void run_demo_command(const DemoArgs& args) {
 void add_demo_command(CLI::App& app) {
     auto args = std::make_shared<DemoArgs>();
     DemoOptions& o = args->options;
-    CLI::App* cmd = app.add_subcommand(
-        "demo",
+    CLI::App* cmd = add_command(
+        app, "demo", "Run the whole job offline on generated models, then a table scene",
         "Run the main job end to end on generated models, offline: generate training meshes of\n"
         "the paper's 10 categories (esf generate), train a database from their views with the\n"
         "Kinect sensor model (esf train), classify views of HELD-OUT models that are not in the\n"
@@ -358,9 +358,7 @@ void add_demo_command(CLI::App& app) {
         "[{class, confidence, model, centroid, size, points, status, message, placed,\n"
         "true_class, label_share, correct}], found, correct}, seconds}. With --work and\n"
         "--report, `esf scene WORK/demo_*.db REPORT/scene_depth.png` recognises the scene again.");
-    cmd->add_option("--seed", o.seed, "Random seed of models, views, noise and scene")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
+    add_seed_option(*cmd, o.seed, "Random seed of models, views, noise and scene");
     cmd->add_option("--per-class", o.per_class, "Training models per category")
         ->capture_default_str()
         ->check(CLI::Range(1, 1000));
@@ -385,10 +383,7 @@ void add_demo_command(CLI::App& app) {
                     "Keep the generated models and the database in this folder (default: a "
                     "temporary folder, removed at the end)");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the text");
-    cmd->add_option("--threads", o.threads, "Worker threads (0 = all cores)")
-        ->transform(esf::cli::thread_limit())
-        ->capture_default_str()
-        ->check(CLI::Range(0, 4096));
+    add_threads_option(*cmd, o.threads);
     cmd->callback([args] { run_demo_command(*args); });
 }
 

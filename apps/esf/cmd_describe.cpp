@@ -23,10 +23,7 @@ namespace {
 
 struct DescribeArgs {
     std::vector<std::string> files;
-    std::uint64_t seed = 0;
-    int samples = 20000;
-    int grid = 64;
-    std::string sampler = "fast";
+    EsfOptions esf;  ///< --seed, --samples, --grid, --sampler
     int threads = 0;
     std::string format = "csv";
     std::string output;
@@ -40,11 +37,7 @@ void append_float(std::string& out, float value) {
 }
 
 void run_describe(const DescribeArgs& args) {
-    EsfOptions options;
-    options.seed = args.seed;
-    options.samples = args.samples;
-    options.grid_size = args.grid;
-    options.sampler = parse_esf_sampler(args.sampler);
+    const EsfOptions& options = args.esf;
     EsfEstimator{options};  // validates the options before any file is read
 
     // Read and describe every file in parallel; each file's outcome goes to its own slot.
@@ -119,26 +112,19 @@ void run_describe(const DescribeArgs& args) {
 
 void add_describe_command(CLI::App& app) {
     auto args = std::make_shared<DescribeArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "describe",
+    CLI::App* cmd = add_command(
+        app, "describe", "Compute the 640-bin ESF descriptor of point-cloud files",
         "Compute the 640-bin ESF descriptor of point-cloud files (PCD, PLY, x y z text).\n"
         "Non-finite points are dropped first. CSV: one line per file, path,v0,...,v639.");
     cmd->add_option("files", args->files, "Point-cloud files (.pcd, .ply, .xyz/.txt)")->required();
-    cmd->add_option("--seed", args->seed, "Random seed; same seed, same descriptor")
-        ->check(esf::cli::non_negative_seed())
+    add_seed_option(*cmd, args->esf.seed, "Random seed; same seed, same descriptor");
+    cmd->add_option("--samples", args->esf.samples, "Point triples sampled (the paper's number)")
         ->capture_default_str();
-    cmd->add_option("--samples", args->samples, "Point triples sampled (paper: 20000)")
+    cmd->add_option("--grid", args->esf.grid_size, "Voxel grid side, 8..64 (paper: 64)")
         ->capture_default_str();
-    cmd->add_option("--grid", args->grid, "Voxel grid side, 8..64 (paper: 64)")
-        ->capture_default_str();
-    cmd->add_option("--sampler", args->sampler,
-                    "fast (default) or pcl (bit-exact pcl::ESFEstimation for srand(seed))")
-        ->check(CLI::IsMember({"fast", "pcl"}))
-        ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_enum_option(*cmd, "--sampler", args->esf.sampler,
+                    "fast or pcl (bit-exact pcl::ESFEstimation for srand(seed))");
+    add_threads_option(*cmd, args->threads);
     cmd->add_option("--format", args->format, "Output format: csv or json")
         ->check(CLI::IsMember({"csv", "json"}))
         ->capture_default_str();

@@ -32,7 +32,7 @@ struct EvalArgs {
     std::string descriptor;
     bool no_weights = false;
     bool every_view = false;
-    std::string vote = "nearest";
+    VoteRule vote = RecognizerOptions{}.vote;
     int samplings = 1;
     std::string queries;
     int threads = 0;
@@ -46,7 +46,7 @@ struct EvalArgs {
     std::string title;
     bool json = false;
     std::string scenes;
-    Grouping grouping = Grouping::kConvexity;
+    Grouping grouping = SegmentationOptions{}.grouping;
 };
 
 std::string percent_of(std::size_t a, std::size_t b) {
@@ -59,7 +59,7 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.descriptor = args.descriptor;
     options.use_weights = !args.no_weights;
     options.one_view_per_model = !args.every_view;
-    options.vote = parse_vote_rule(args.vote);
+    options.vote = args.vote;
     options.query_samplings = args.samplings;
     options.threads = args.threads;
     options.verification_meshes = args.verification.verification_meshes;
@@ -277,8 +277,8 @@ void run_eval(const EvalArgs& args) {
 
 void add_eval_command(CLI::App& app) {
     auto args = std::make_shared<EvalArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "eval",
+    CLI::App* cmd = add_command(
+        app, "eval", "Measure accuracy on a test set, synthetic views or labelled scenes",
         "Measure classification accuracy (Wohlkinger & Vincze 2011, Table I).\n"
         "  esf eval DB TESTSET.csv     labelled real clouds: a CSV with a header naming at least\n"
         "                              the columns file and class (paths relative to the CSV)\n"
@@ -327,18 +327,13 @@ void add_eval_command(CLI::App& app) {
     cmd->add_flag("--every-view", args->every_view,
                   "Rank the k nearest views, several of one model among them (the paper's "
                   "ranks; default: one view per model)");
-    cmd->add_option("--vote", args->vote,
-                    "Scenes: how the neighbours name an object's class, nearest or majority")
-        ->check(CLI::IsMember({"nearest", "majority"}))
-        ->capture_default_str();
+    add_enum_option(*cmd, "--vote", args->vote,
+                    "Scenes: how the neighbours name an object's class, nearest or majority");
     cmd->add_option("--samplings", args->samplings,
                     "Describe each query this many times (other seeds) and average")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_threads_option(*cmd, args->threads);
     cmd->add_flag("--synthetic", args->synthetic,
                   "Leave-one-model-out over the database's own views instead of a test set");
     cmd->add_option("--groups", args->groups,
@@ -368,9 +363,9 @@ void add_eval_command(CLI::App& app) {
                     "Evaluate segmentation and recognition on labelled scenes (CSV: scene_file, "
                     "object_id, class[, scene_type])")
         ->check(CLI::ExistingFile);
-    add_grouping_option(*cmd, args->grouping,
-                        "With --scenes: how points above the table become objects (as in esf "
-                        "segment)");
+    add_enum_option(*cmd, "--grouping", args->grouping,
+                    "With --scenes: how points above the table become objects (as in esf "
+                    "segment)");
     cmd->add_option("--title", args->title, "Title of the report (default: esf eval: DB)");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the tables");
     cmd->callback([args] { run_eval(*args); });

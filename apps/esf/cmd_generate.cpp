@@ -99,8 +99,8 @@ void add_generate_command(CLI::App& app) {
     auto args = std::make_shared<GenerateArgs>();
     std::string known;
     for (const std::string& c : generated_categories()) known += (known.empty() ? "" : ", ") + c;
-    CLI::App* cmd = app.add_subcommand(
-        "generate",
+    CLI::App* cmd = add_command(
+        app, "generate", "Write parametric training meshes of the paper's ten categories",
         "Write parametric, randomised training meshes of the paper's ten categories as\n"
         "DIR/<category>/gen_<category>_NNN.ply (binary PLY, metres, +z up, watertight).\n"
         "Categories: " +
@@ -114,16 +114,11 @@ void add_generate_command(CLI::App& app) {
     cmd->add_option("--per-class", args->per_class, "Models per category")
         ->capture_default_str()
         ->check(CLI::Range(1, 100000));
-    cmd->add_option("--seed", args->seed, "Random seed")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
+    add_seed_option(*cmd, args->seed, "Random seed");
     cmd->add_option("--categories", args->categories,
                     "Comma-separated subset of the categories (default: all)")
         ->delimiter(',');
-    cmd->add_option("--threads", args->threads, "Worker threads (0 = all cores)")
-        ->transform(esf::cli::thread_limit())
-        ->capture_default_str()
-        ->check(CLI::Range(0, 4096));
+    add_threads_option(*cmd, args->threads);
     cmd->add_flag("--json", args->json,
                   "Print one JSON object: output, seed, per_class, models [{category, name, path, "
                   "vertices, triangles, extent_m}]");

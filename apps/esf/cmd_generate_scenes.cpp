@@ -24,7 +24,7 @@ struct GenerateScenesArgs {
     std::uint64_t seed = 0;
     int threads = 0;
     std::vector<std::string> types;
-    std::string noise = "kinect";
+    SensorNoise noise = ClutterOptions{}.noise;
     double min_distance = kClutterMinDistance;
     double max_distance = kClutterMaxDistance;
     double min_elevation = kClutterMinElevation;
@@ -39,13 +39,13 @@ void run_generate_scenes(const GenerateScenesArgs& args) {
     SceneGenerationOptions options;
     options.scenes = args.scenes;
     options.clutter.seed = args.seed;
-    options.clutter.noise = parse_sensor_noise(args.noise);
+    options.clutter.noise = args.noise;
     options.clutter.min_distance = args.min_distance;
     options.clutter.max_distance = args.max_distance;
     options.clutter.min_elevation = args.min_elevation;
     options.clutter.max_elevation = args.max_elevation;
     for (const std::string& type : args.types)
-        options.clutter.types.push_back(parse_clutter_type(type));
+        options.clutter.types.push_back(parse_enum<ClutterType>(type));
     options.groups = args.groups.selection();
     options.catalog = args.catalog;
     options.use_catalog = !args.no_catalog;
@@ -88,8 +88,9 @@ void run_generate_scenes(const GenerateScenesArgs& args) {
 
 void add_generate_scenes_command(CLI::App& app) {
     auto args = std::make_shared<GenerateScenesArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "generate-scenes",
+    CLI::App* cmd = add_command(
+        app, "generate-scenes",
+        "Generate labelled, cluttered table scenes of the meshes under ROOT",
         "Cluttered table scenes of the meshes under ROOT (as for `esf train`), seen by a\n"
         "Kinect-like sensor 0.6 to 1.5 m away, 25 to 65 degrees above the table: "
         "DIR/scene_NNNN.pcd\n"
@@ -108,14 +109,10 @@ void add_generate_scenes_command(CLI::App& app) {
         ->capture_default_str();
     add_seed_option(*cmd, args->seed, "Random seed (layouts, cameras, sensor noise)");
     add_threads_option(*cmd, args->threads);
-    std::vector<std::string> type_names;
-    for (const ClutterType t : clutter_types()) type_names.emplace_back(to_string(t));
     cmd->add_option("--types", args->types, "Scene types in turn (comma-separated; default: all)")
         ->delimiter(',')
-        ->check(CLI::IsMember(type_names));
-    cmd->add_option("--noise", args->noise, "Sensor noise model: kinect or none")
-        ->check(CLI::IsMember({"kinect", "none"}))
-        ->capture_default_str();
+        ->check(CLI::IsMember(enum_names<ClutterType>()));
+    add_enum_option(*cmd, "--noise", args->noise, "Sensor noise model: kinect or none");
     cmd->add_option("--min-distance", args->min_distance, "Nearest camera, metres")
         ->check(CLI::Range(0.1, 10.0))
         ->capture_default_str();

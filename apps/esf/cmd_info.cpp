@@ -121,8 +121,8 @@ void run_info(const InfoArgs& args) {
 
 void add_info_command(CLI::App& app) {
     auto args = std::make_shared<InfoArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "info",
+    CLI::App* cmd = add_command(
+        app, "info", "Show what a training database holds and how it was trained",
         "Show what a training database holds: categories, models per category, views,\n"
         "skipped views, failed models and the settings it was trained with. Read-only.");
     cmd->add_option("database", args->database, "Database made by esf train")->required();

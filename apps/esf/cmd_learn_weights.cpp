@@ -149,8 +149,8 @@ void run_learn_weights(const LearnArgs& args) {
 
 void add_learn_weights_command(CLI::App& app) {
     auto args = std::make_shared<LearnArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "learn-weights",
+    CLI::App* cmd = add_command(
+        app, "learn-weights", "Learn the weights of a descriptor's sub-histograms",
         "Learn the weights of a descriptor's sub-histograms (ESF's ten: D2, D3, A3 and their\n"
         "IN/OUT/MIXED splits, D2 ratio; esf-angles adds its six surface angle histograms)\n"
         "on the database's own synthetic views, leave-one-model-out (with\n"
@@ -189,10 +189,7 @@ void add_learn_weights_command(CLI::App& app) {
     cmd->add_option("-k", args->k, "Nearest views for the k-NN accuracy printed before/after")
         ->check(CLI::Range(1, 1000))
         ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_threads_option(*cmd, args->threads);
     cmd->add_flag("--dry-run", args->dry_run, "Learn and print, but do not store the weights");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the text");
     cmd->callback([args] { run_learn_weights(*args); });

@@ -36,10 +36,10 @@ struct RenderArgs {
     std::optional<double> distance;
     std::optional<double> scale;
     std::optional<double> extent;
-    std::string noise = "kinect";
+    SensorNoise noise = RenderOptions{}.noise;
     std::uint64_t seed = 0;
     int threads = 0;
-    std::string encoding = "binary";
+    PcdEncoding encoding = PcdEncoding::kBinary;
     bool json = false;
 };
 
@@ -49,12 +49,6 @@ std::string view_name(std::size_t index, std::size_t count) {
     std::ostringstream name;
     name << "view_" << std::setw(digits) << std::setfill('0') << index << ".pcd";
     return name.str();
-}
-
-PcdEncoding parse_encoding(const std::string& name) {
-    if (name == "ascii") return PcdEncoding::kAscii;
-    if (name == "binary_compressed") return PcdEncoding::kBinaryCompressed;
-    return PcdEncoding::kBinary;
 }
 
 void write_text(const std::filesystem::path& path, const std::string& text) {
@@ -91,10 +85,10 @@ void run_render(const RenderArgs& args) {
     options.distance = args.distance;
     if (args.scale) options.scale = *args.scale;
     options.target_extent = args.extent;
-    options.noise = parse_sensor_noise(args.noise);
+    options.noise = args.noise;
     options.seed = args.seed;
     options.threads = args.threads;
-    const PcdEncoding encoding = parse_encoding(args.encoding);
+    const PcdEncoding encoding = args.encoding;
 
     const auto start = std::chrono::steady_clock::now();
     const Mesh mesh = load_mesh(args.mesh);
@@ -194,8 +188,8 @@ void run_render(const RenderArgs& args) {
 
 void add_render_command(CLI::App& app) {
     auto args = std::make_shared<RenderArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "render",
+    CLI::App* cmd = add_command(
+        app, "render", "Render synthetic partial views of a CAD mesh from a view sphere",
         "Render synthetic partial views of a CAD mesh (PLY, OBJ, OFF, STL, glTF/GLB, DAE, 3DS, "
         "...)\nfrom cameras on a tessellated view sphere looking at the model's bounding-box "
         "centre.\nWrites DIR/view_NNN.pcd (points in the camera frame: x right, y down, z "
@@ -240,22 +234,13 @@ void add_render_command(CLI::App& app) {
                     "(for non-metric meshes, e.g. KIT)")
         ->check(CLI::PositiveNumber)
         ->excludes(scale);
-    cmd->add_option("--noise", args->noise,
+    add_enum_option(*cmd, "--noise", args->noise,
                     "Sensor model: kinect (axial noise, 1/8 px disparity quantisation, drops at "
-                    "grazing angles) or none (exact depth)")
-        ->check(CLI::IsMember({"none", "kinect"}))
-        ->capture_default_str();
-    cmd->add_option("--seed", args->seed, "Noise seed; same seed, same views (any thread count)")
-        ->check(esf::cli::non_negative_seed())
-        ->capture_default_str();
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
-    cmd->add_option("--encoding", args->encoding,
-                    "PCD encoding: binary, ascii or binary_compressed")
-        ->check(CLI::IsMember({"binary", "ascii", "binary_compressed"}))
-        ->capture_default_str();
+                    "grazing angles) or none (exact depth)");
+    add_seed_option(*cmd, args->seed, "Noise seed; same seed, same views (any thread count)");
+    add_threads_option(*cmd, args->threads);
+    add_enum_option(*cmd, "--encoding", args->encoding,
+                    "PCD encoding: binary, ascii or binary_compressed");
     cmd->add_flag("--json", args->json, "Print the summary as JSON");
     cmd->callback([args] { run_render(*args); });
 }

@@ -214,11 +214,12 @@ void run_scene(SceneArgs& args) {
 
 void add_scene_command(CLI::App& app) {
     auto args = std::make_shared<SceneArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "scene",
-        "Recognise the objects on a table: each scene is segmented as by esf segment (dominant\n"
-        "plane, Euclidean clusters above it), every cluster is described with the database's\n"
-        "descriptor and settings (in parallel) and classified by its k nearest views. The\n"
+    CLI::App* cmd = add_command(
+        app, "scene", "Recognise the objects on a table: segment, then classify each",
+        "Each scene is segmented as by esf segment (the dominant plane, and the objects above\n"
+        "it grouped by --grouping, convexity by default), every object is described with the\n"
+        "database's descriptor and settings (in parallel) and classified by its k nearest\n"
+        "views. The\n"
         "database is loaded once for all scenes. Prints per object its class, confidence,\n"
         "nearest model, view and distance, points, centroid and size (metres), and status\n"
         "(ok, maybe_truncated, or failed with the reason). --json prints per scene {file,\n"

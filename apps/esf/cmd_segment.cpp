@@ -76,23 +76,22 @@ void run_segment(const SegmentArgs& args) {
                         {"inliers", result.plane_inliers}};
     summary["message"] = result.message;
     const SegmentationOptions& o = options;
-    summary["options"] = {
-        {"plane_distance_m", o.plane_distance},
-        {"plane_iterations", o.plane_iterations},
-        {"plane_samples", o.plane_samples},
-        {"min_plane_points", o.min_plane_points},
-        {"min_plane_fraction", o.min_plane_fraction},
-        {"min_height_m", o.min_height},
-        {"max_height_m", o.max_height},
-        {"viewpoint_m", vec(o.viewpoint)},
-        {"grouping", o.grouping == Grouping::kConvexity ? "convexity" : "euclidean"},
-        {"concavity_tolerance_deg", o.convexity.concavity_tolerance_deg},
-        {"patch_pixels", o.patches.tile_pixels},
-        {"patch_size_m", o.patches.voxel_size},
-        {"cluster_tolerance_m", o.cluster_tolerance},
-        {"min_cluster_points", o.min_cluster_points},
-        {"max_cluster_points", o.max_cluster_points},
-        {"seed", o.seed}};
+    summary["options"] = {{"plane_distance_m", o.plane_distance},
+                          {"plane_iterations", o.plane_iterations},
+                          {"plane_samples", o.plane_samples},
+                          {"min_plane_points", o.min_plane_points},
+                          {"min_plane_fraction", o.min_plane_fraction},
+                          {"min_height_m", o.min_height},
+                          {"max_height_m", o.max_height},
+                          {"viewpoint_m", vec(o.viewpoint)},
+                          {"grouping", to_string(o.grouping)},
+                          {"concavity_tolerance_deg", o.convexity.concavity_tolerance_deg},
+                          {"patch_pixels", o.patches.tile_pixels},
+                          {"patch_size_m", o.patches.voxel_size},
+                          {"cluster_tolerance_m", o.cluster_tolerance},
+                          {"min_cluster_points", o.min_cluster_points},
+                          {"max_cluster_points", o.max_cluster_points},
+                          {"seed", o.seed}};
     summary["clusters"] = nlohmann::json::array();
     for (std::size_t k = 0; k < result.clusters.size(); ++k) {
         const Cluster& c = result.clusters[k];
@@ -147,13 +146,19 @@ void run_segment(const SegmentArgs& args) {
 
 void add_segment_command(CLI::App& app) {
     auto args = std::make_shared<SegmentArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "segment",
-        "Split a table scene into object clusters: the dominant plane is found (RANSAC), the\n"
-        "points standing on it (above it on the sensor's side, inside its convex hull) are\n"
-        "grouped by Euclidean clustering. Writes DIR/cluster_000.pcd ... (full-resolution\n"
-        "points, largest cluster first; older cluster_NNN.pcd files in DIR are removed) and\n"
-        "DIR/summary.json (plane, clusters with centroid, size and point count), and prints a\n"
+    CLI::App* cmd = add_command(
+        app, "segment", "Split a table scene into the objects standing on the table",
+        "The dominant plane is found (RANSAC); the points standing on it (above it on the\n"
+        "sensor's side, inside its convex hull) are grouped into objects. By default\n"
+        "(--grouping convexity) small surface patches join where the surface between them is\n"
+        "convex or nearly flat, so touching, stacked and leaning objects part at the concave\n"
+        "creases between them; the parts of an object cut apart by an occluder in front of it\n"
+        "join again (organised clouds), and a container's inside joins its outside.\n"
+        "--grouping euclidean makes all points that touch (gaps up to --cluster-tolerance) one\n"
+        "object. Objects with too few or too many points are dropped. Writes\n"
+        "DIR/cluster_000.pcd ... (full-resolution points, largest cluster first; older\n"
+        "cluster_NNN.pcd files in DIR are removed) and DIR/summary.json (plane, clusters with\n"
+        "centroid, size and point count), and prints a\n"
         "table. A scene without a plane or without objects is reported, not an error.");
     cmd->add_option("scene", args->scene,
                     "Point cloud (.pcd, .ply, .xyz), organised or not, or a 16-bit depth PNG")
@@ -163,10 +168,7 @@ void add_segment_command(CLI::App& app) {
         ->required();
     add_depth_png_options(*cmd, args->input);
     add_segmentation_options(*cmd, args->input);
-    cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores")
-        ->transform(esf::cli::thread_limit())
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_threads_option(*cmd, args->threads);
     cmd->add_flag("--json", args->json, "Print summary.json to stdout instead of the table");
     cmd->callback([args] { run_segment(*args); });
 }

@@ -26,8 +26,8 @@ struct TrainArgs {
     int level = 1;
     int threads = 0;
     std::uint64_t seed = 0;
-    int samples = 20000;
-    std::string noise = "kinect";
+    int samples = kEsfSamples;
+    SensorNoise noise = default_training_render().noise;
     std::string camera = "kinect";
     double fill = 0.5;
     double distance = kTrainingCameraDistance;
@@ -49,7 +49,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 void run_train(const TrainArgs& args) {
     TrainingOptions options;
     options.render.level = args.level;
-    options.render.noise = parse_sensor_noise(args.noise);
+    options.render.noise = args.noise;
     options.render.camera =
         args.camera == "pcl" ? CameraIntrinsics::pcl_renderer() : CameraIntrinsics::kinect();
     options.render.fill_fraction = args.fill;
@@ -133,8 +133,8 @@ void run_train(const TrainArgs& args) {
 
 void add_train_command(CLI::App& app) {
     auto args = std::make_shared<TrainArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "train",
+    CLI::App* cmd = add_command(
+        app, "train", "Build a training database from the rendered views of CAD models",
         "Build a training database from CAD models: ROOT/<category>/<model>.<ext>\n"
         "(ply obj off stl gltf glb dae 3ds fbx). Every model is rendered from the view sphere\n"
         "(level 1: 80 cameras; by default the 44 above the model's xy plane, each 0.6 to 1.2 m\n"
@@ -163,15 +163,13 @@ void add_train_command(CLI::App& app) {
     add_threads_option(*cmd, args->threads);
     add_seed_option(*cmd, args->seed, "Random seed (sensor noise, descriptor sampling)");
     cmd->add_option("--samples", args->samples,
-                    "Point triples per view of esf, esf-angles, sdvs, d2 (paper: 20000)")
+                    "Point triples per view of esf, esf-angles, sdvs, d2 (the paper's number)")
         ->capture_default_str();
     cmd->add_option("--angles-weight", args->angles_weight,
                     "esf-angles: weight of the surface angle histograms against ESF's 1")
         ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
-    cmd->add_option("--noise", args->noise, "Sensor noise model: kinect or none")
-        ->check(CLI::IsMember({"kinect", "none"}))
-        ->capture_default_str();
+    add_enum_option(*cmd, "--noise", args->noise, "Sensor noise model: kinect or none");
     cmd->add_option("--camera", args->camera,
                     "Camera: kinect (640x480, f 525) or pcl (PCL's renderer, 150x150)")
         ->check(CLI::IsMember({"kinect", "pcl"}))

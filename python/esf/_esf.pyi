@@ -1,4 +1,5 @@
-# Type stubs of the compiled module esf._esf (see its docstrings for the full story).
+# Type stubs of the compiled module esf._esf (see its docstrings for the full story). Defaults
+# are `...`: the module takes them from the C++ option structs, and help(esf.NAME) shows them.
 import os
 from typing import Any, Callable, Sequence, Union
 
@@ -14,19 +15,19 @@ __version__: str
 ESF_SIZE: int
 
 def as_points(points: PointsLike) -> FloatArray: ...
-def read_cloud(path: PathLike, *, organized: bool = False) -> FloatArray: ...
-def write_cloud(path: PathLike, points: PointsLike, *, encoding: str = "binary") -> None: ...
+def read_cloud(path: PathLike, *, organized: bool = ...) -> FloatArray: ...
+def write_cloud(path: PathLike, points: PointsLike, *, encoding: str = ...) -> None: ...
 def describe(
-    points: PointsLike, *, samples: int = 20000, seed: int = 0, sampler: str = "fast", grid: int = 64
+    points: PointsLike, *, samples: int = ..., seed: int = ..., sampler: str = ..., grid: int = ...
 ) -> FloatArray: ...
 def describe_batch(
     clouds: Sequence[PointsLike],
     *,
-    samples: int = 20000,
-    seed: int = 0,
-    sampler: str = "fast",
-    grid: int = 64,
-    threads: int = 0,
+    samples: int = ...,
+    seed: int = ...,
+    sampler: str = ...,
+    grid: int = ...,
+    threads: int = ...,
 ) -> FloatArray: ...
 
 class Cluster:
@@ -60,15 +61,15 @@ class Segmentation:
 def segment(
     points: PointsLike,
     *,
-    grouping: str = "convexity",
-    plane_distance: float = 0.01,
-    min_height: float = 0.01,
-    max_height: float = 0.40,
-    cluster_tolerance: float = 0.02,
-    min_cluster_points: int = 100,
+    grouping: str = ...,
+    plane_distance: float = ...,
+    min_height: float = ...,
+    max_height: float = ...,
+    cluster_tolerance: float = ...,
+    min_cluster_points: int = ...,
     viewpoint: Sequence[float] | None = None,
-    seed: int = 0,
-    threads: int = 0,
+    seed: int = ...,
+    threads: int = ...,
 ) -> Segmentation: ...
 
 class Neighbour:
@@ -128,13 +129,13 @@ class Recognizer:
         self,
         database: PathLike,
         *,
-        k: int = 10,
-        descriptor: str = "",
-        use_weights: bool = True,
-        samplings: int = 1,
-        vote: str = "nearest",
-        every_view: bool = False,
-        threads: int = 0,
+        k: int = ...,
+        descriptor: str = ...,
+        use_weights: bool = ...,
+        samplings: int = ...,
+        vote: str = ...,
+        every_view: bool = ...,
+        threads: int = ...,
         verify: PathLike | None = None,
     ) -> None: ...
     def classify(self, points: PointsLike, k: int | None = None) -> Classification: ...
@@ -143,15 +144,15 @@ class Recognizer:
         self,
         points: PointsLike,
         *,
-        grouping: str = "convexity",
-        plane_distance: float = 0.01,
-        min_height: float = 0.01,
-        max_height: float = 0.40,
-        cluster_tolerance: float = 0.02,
-        min_cluster_points: int = 100,
+        grouping: str = ...,
+        plane_distance: float = ...,
+        min_height: float = ...,
+        max_height: float = ...,
+        cluster_tolerance: float = ...,
+        min_cluster_points: int = ...,
         viewpoint: Sequence[float] | None = None,
-        seed: int = 0,
-        threads: int = 0,
+        seed: int = ...,
+        threads: int = ...,
     ) -> list[SceneObject]: ...
     @property
     def k(self) -> int: ...
@@ -165,12 +166,12 @@ class Recognizer:
 def evaluate(
     database: PathLike,
     test_set: PathLike,
-    k: int = 10,
+    k: int = ...,
     *,
-    descriptor: str = "",
-    use_weights: bool = True,
-    samplings: int = 1,
-    threads: int = 0,
+    descriptor: str = ...,
+    use_weights: bool = ...,
+    samplings: int = ...,
+    threads: int = ...,
 ) -> dict[str, Any]: ...
 
 class TrainingProgress:
@@ -193,19 +194,19 @@ def train(
     root: PathLike,
     database: PathLike,
     *,
-    descriptor: str = "esf-angles",
-    level: int = 1,
-    samples: int = 20000,
-    seed: int = 0,
-    noise: str = "kinect",
-    distance: float | None = 0.6,
-    max_distance: float | None = 1.2,
-    min_elevation: float = 0.0,
-    max_elevation: float = 90.0,
-    min_points: int = 50,
+    descriptor: str = ...,
+    level: int = ...,
+    samples: int = ...,
+    seed: int = ...,
+    noise: str = ...,
+    distance: float | None = ...,
+    max_distance: float | None = ...,
+    min_elevation: float = ...,
+    max_elevation: float = ...,
+    min_points: int = ...,
     catalog: PathLike | None = None,
-    use_catalog: bool = True,
-    threads: int = 0,
+    use_catalog: bool = ...,
+    threads: int = ...,
     progress: Callable[[TrainingProgress], object] | None = None,
 ) -> dict[str, Any]: ...
 
@@ -220,23 +221,23 @@ class View:
 def render(
     mesh: PathLike,
     *,
-    level: int = 1,
-    width: int = 640,
-    height: int = 480,
+    level: int = ...,
+    width: int = ...,
+    height: int = ...,
     fx: float | None = None,
     fy: float | None = None,
     cx: float | None = None,
     cy: float | None = None,
-    fill: float = 0.5,
+    fill: float = ...,
     distance: float | None = None,
     max_distance: float | None = None,
-    min_elevation: float = -90.0,
-    max_elevation: float = 90.0,
-    noise: str = "kinect",
-    seed: int = 0,
-    scale: float = 1.0,
+    min_elevation: float = ...,
+    max_elevation: float = ...,
+    noise: str = ...,
+    seed: int = ...,
+    scale: float = ...,
     extent: float | None = None,
-    threads: int = 0,
+    threads: int = ...,
 ) -> list[View]: ...
 
 class Database:
@@ -253,5 +254,5 @@ class Database:
     def view_count(self) -> int: ...
     @property
     def descriptor_kinds(self) -> list[tuple[str, int, int]]: ...
-    def views(self, category: str, model: str, descriptor: str = "") -> list[dict[str, Any]]: ...
-    def descriptors(self, descriptor: str = "") -> tuple[FloatArray, list[str], list[str]]: ...
+    def views(self, category: str, model: str, descriptor: str = ...) -> list[dict[str, Any]]: ...
+    def descriptors(self, descriptor: str = ...) -> tuple[FloatArray, list[str], list[str]]: ...

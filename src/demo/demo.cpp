@@ -402,20 +402,6 @@ void recognise(DemoResult& r, const RenderOptions& training_render, const DemoOp
 
 }  // namespace
 
-const char* to_string(DemoStage stage) {
-    switch (stage) {
-        case DemoStage::kGenerate:
-            return "generate";
-        case DemoStage::kTrain:
-            return "train";
-        case DemoStage::kQuery:
-            return "query";
-        case DemoStage::kScene:
-            return "scene";
-    }
-    return "?";
-}
-
 DemoResult run_demo(const DemoOptions& options) {
     validate_options(options);
     const auto start = Clock::now();

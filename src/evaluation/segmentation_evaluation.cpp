@@ -7,20 +7,6 @@
 
 namespace esf {
 
-const char* to_string(SegmentOutcome outcome) {
-    switch (outcome) {
-        case SegmentOutcome::kFound:
-            return "found";
-        case SegmentOutcome::kMerged:
-            return "merged";
-        case SegmentOutcome::kSplit:
-            return "split";
-        case SegmentOutcome::kMissed:
-            return "missed";
-    }
-    return "unknown";
-}
-
 std::size_t SegmentationScore::count(SegmentOutcome outcome) const {
     return static_cast<std::size_t>(
         std::count_if(objects.begin(), objects.end(),

@@ -8,16 +8,6 @@
 
 namespace esf {
 
-const char* to_string(VoteRule rule) {
-    return rule == VoteRule::kMajority ? "majority" : "nearest";
-}
-
-VoteRule parse_vote_rule(const std::string& name) {
-    if (name == "nearest") return VoteRule::kNearest;
-    if (name == "majority") return VoteRule::kMajority;
-    throw std::invalid_argument("unknown vote rule '" + name + "' (nearest or majority)");
-}
-
 void adopt_neighbour(Classification& c, const NeighbourView& n) {
     c.class_name = n.class_name;
     c.class_id = n.class_id;

@@ -26,9 +26,6 @@ namespace {
 using detail::Vec2;
 using Hull = std::vector<Vec2>;
 
-constexpr std::array<const char*, 7> kTypeNames = {"isolated",  "touching", "stacked", "occluded",
-                                                   "cylindric", "mixed",    "complex"};
-
 // Keys that separate the random streams of one scene.
 constexpr std::uint64_t kLayoutKey = 0x6c61796f7574ull;  // "layout"
 constexpr std::uint64_t kNoiseKey = 0x6e6f697365ull;     // "noise"
@@ -205,25 +202,6 @@ Eigen::Matrix3d rotation_about(const Eigen::Vector3d& axis, double angle) {
 }
 
 }  // namespace
-
-const std::vector<ClutterType>& clutter_types() {
-    static const std::vector<ClutterType> types = {ClutterType::kIsolated,  ClutterType::kTouching,
-                                                   ClutterType::kStacked,   ClutterType::kOccluded,
-                                                   ClutterType::kCylindric, ClutterType::kMixed,
-                                                   ClutterType::kComplex};
-    return types;
-}
-
-const char* to_string(ClutterType type) { return kTypeNames.at(static_cast<std::size_t>(type)); }
-
-ClutterType parse_clutter_type(const std::string& name) {
-    std::string valid;
-    for (std::size_t i = 0; i < kTypeNames.size(); ++i) {
-        if (name == kTypeNames[i]) return static_cast<ClutterType>(i);
-        valid += (i ? ", " : "") + std::string(kTypeNames[i]);
-    }
-    throw std::invalid_argument("unknown scene type '" + name + "' (valid: " + valid + ")");
-}
 
 struct ClutterComposer::Impl {
     std::vector<ClutterModel> models;

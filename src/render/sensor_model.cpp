@@ -22,22 +22,6 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 
 }  // namespace
 
-SensorNoise parse_sensor_noise(const std::string& name) {
-    if (name == "none") return SensorNoise::kNone;
-    if (name == "kinect") return SensorNoise::kKinect;
-    throw std::invalid_argument("unknown sensor noise '" + name + "' (expected none or kinect)");
-}
-
-const char* to_string(SensorNoise noise) {
-    switch (noise) {
-        case SensorNoise::kNone:
-            return "none";
-        case SensorNoise::kKinect:
-            return "kinect";
-    }
-    return "unknown";
-}
-
 double kinect_axial_sigma(double z, double theta) {
     double sigma = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);
     if (theta > 60.0 * kDegree) {

@@ -362,14 +362,4 @@ SegmentationResult segment_scene(std::span<const Eigen::Vector3f> points,
     return segment(points, static_cast<std::uint32_t>(points.size()), 1, options);
 }
 
-const char* to_string(ClusterStatus status) {
-    switch (status) {
-        case ClusterStatus::kOk:
-            return "ok";
-        case ClusterStatus::kMaybeTruncated:
-            return "maybe_truncated";
-    }
-    return "unknown";
-}
-
 }  // namespace esf

@@ -198,10 +198,6 @@ std::string to_string(const SettingValue& value) {
     return std::get<std::string>(value);
 }
 
-const char* to_string(ModelStatus status) {
-    return status == ModelStatus::kComplete ? "complete" : "failed";
-}
-
 // ---------------------------------------------------------------------------------------------
 // A thin RAII layer over sqlite3: every failure becomes an IoError naming the file.
 

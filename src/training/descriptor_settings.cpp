@@ -132,7 +132,8 @@ DescriptorSetup read_descriptor_setup(const Settings& settings, const Descriptor
         EsfOptions& e = setup.esf;
         e.samples = int_setting(settings, "esf_samples", e.samples);
         e.grid_size = int_setting(settings, "esf_grid_size", e.grid_size);
-        e.sampler = parse_esf_sampler(text_setting(settings, "esf_sampler", to_string(e.sampler)));
+        e.sampler =
+            parse_enum<EsfSampler>(text_setting(settings, "esf_sampler", to_string(e.sampler)));
         e.max_attempts_per_sample =
             int_setting(settings, "esf_max_attempts_per_sample", e.max_attempts_per_sample);
         e.seed = seed;

@@ -1,6 +1,6 @@
 // Runs the built `esf` binary (ESF_CLI): usage errors from the argument parser come out as one
 // line "esf: error: ..." on stderr with exit status 1; runtime errors exit 2; --help and
-// --version still print to stdout and exit 0.
+// --version still print to stdout and exit 0; `esf --help` fits on one screen.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "support/cli_run.hpp"
 
@@ -89,6 +91,45 @@ TEST_F(CliUsageTest, HelpAndVersionStillGoToStdout) {
     const CliRun sub = esf("describe --help");
     EXPECT_EQ(sub.code, 0);
     EXPECT_NE(sub.out.find("--threads"), std::string::npos);
+}
+
+/// The lines of `text`.
+std::vector<std::string> lines_of(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+}
+
+// `esf --help` is one screen: at most 40 lines, one line per command (its summary); each
+// command's own --help starts with that summary and ends with the long description.
+TEST_F(CliUsageTest, HelpListsEveryCommandOnOneLine) {
+    const std::vector<std::string> commands = {
+        "demo",     "describe", "train",   "info", "segment",       "generate",       "render",
+        "classify", "scene",    "compare", "eval", "learn-weights", "generate-scenes"};
+    const CliRun help = esf("--help");
+    ASSERT_EQ(help.code, 0);
+    const std::vector<std::string> lines = lines_of(help.out);
+    EXPECT_LE(lines.size(), 40u) << help.out;
+    const auto first = std::find(lines.begin(), lines.end(), "Subcommands:");
+    ASSERT_NE(first, lines.end()) << help.out;
+    std::vector<std::string> listed;
+    for (auto it = first + 1; it != lines.end() && !it->empty(); ++it) listed.push_back(*it);
+    ASSERT_EQ(listed.size(), commands.size()) << help.out;
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+        SCOPED_TRACE(commands[i]);
+        const std::string& line = listed[i];
+        ASSERT_EQ(line.rfind("  " + commands[i] + " ", 0), 0u) << line;
+        EXPECT_LE(line.size(), 100u) << line;
+        const std::string summary =
+            line.substr(line.find_first_not_of(' ', commands[i].size() + 2));
+        const CliRun own = esf(commands[i] + " --help");
+        EXPECT_EQ(own.code, 0);
+        EXPECT_EQ(own.out.rfind(summary, 0), 0u) << own.out;
+        EXPECT_GT(lines_of(own.out).size(), 10u) << own.out;
+    }
+    // The long description of segment names the grouping it uses by default.
+    EXPECT_NE(esf("segment --help").out.find("--grouping convexity"), std::string::npos);
 }
 
 }  // namespace

@@ -234,8 +234,8 @@ TEST(EsfDescriptor, OptionsAreValidated) {
     bad.grid_size = 32;
     bad.sampler = esf::EsfSampler::kPcl;
     EXPECT_THROW(esf::EsfEstimator{bad}, std::invalid_argument);
-    EXPECT_THROW(esf::parse_esf_sampler("slow"), std::invalid_argument);
-    EXPECT_EQ(esf::parse_esf_sampler("pcl"), esf::EsfSampler::kPcl);
+    EXPECT_THROW(esf::parse_enum<esf::EsfSampler>("slow"), std::invalid_argument);
+    EXPECT_EQ(esf::parse_enum<esf::EsfSampler>("pcl"), esf::EsfSampler::kPcl);
 }
 
 TEST(EsfDescriptor, SmallerGridAndFewerSamplesWork) {

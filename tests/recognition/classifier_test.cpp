@@ -116,10 +116,10 @@ TEST(Classifier, NearestRuleOrdersTheOtherClassesByVotes) {
 
 TEST(Classifier, VoteRuleNames) {
     EXPECT_STREQ(esf::to_string(esf::VoteRule::kNearest), "nearest");
-    EXPECT_EQ(esf::parse_vote_rule("majority"), esf::VoteRule::kMajority);
-    EXPECT_EQ(esf::parse_vote_rule(esf::to_string(esf::VoteRule::kNearest)),
+    EXPECT_EQ(esf::parse_enum<esf::VoteRule>("majority"), esf::VoteRule::kMajority);
+    EXPECT_EQ(esf::parse_enum<esf::VoteRule>(esf::to_string(esf::VoteRule::kNearest)),
               esf::VoteRule::kNearest);
-    EXPECT_THROW(esf::parse_vote_rule("Majority"), std::invalid_argument);
+    EXPECT_THROW(esf::parse_enum<esf::VoteRule>("Majority"), std::invalid_argument);
 }
 
 TEST(Classifier, OneNearestNeighbourIsTheNearestViewsClass) {

@@ -91,8 +91,9 @@ TEST_F(ClutterSceneTest, TypesComeInTurnAndParse) {
     const esf::ClutterComposer c = composer();
     const auto& types = esf::clutter_types();
     for (std::size_t i = 0; i < 20; ++i) EXPECT_EQ(c.type_of(i), types[i % types.size()]);
-    for (const esf::ClutterType t : types) EXPECT_EQ(esf::parse_clutter_type(esf::to_string(t)), t);
-    EXPECT_THROW(esf::parse_clutter_type("cluttered"), std::invalid_argument);
+    for (const esf::ClutterType t : types)
+        EXPECT_EQ(esf::parse_enum<esf::ClutterType>(esf::to_string(t)), t);
+    EXPECT_THROW(esf::parse_enum<esf::ClutterType>("cluttered"), std::invalid_argument);
 }
 
 // Every labelled pixel lies on the surface of its object under the truth pose; table pixels lie

@@ -13,12 +13,12 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 TEST(SensorModel, ParseAndPrint) {
-    EXPECT_EQ(esf::parse_sensor_noise("none"), esf::SensorNoise::kNone);
-    EXPECT_EQ(esf::parse_sensor_noise("kinect"), esf::SensorNoise::kKinect);
+    EXPECT_EQ(esf::parse_enum<esf::SensorNoise>("none"), esf::SensorNoise::kNone);
+    EXPECT_EQ(esf::parse_enum<esf::SensorNoise>("kinect"), esf::SensorNoise::kKinect);
     EXPECT_STREQ(esf::to_string(esf::SensorNoise::kNone), "none");
     EXPECT_STREQ(esf::to_string(esf::SensorNoise::kKinect), "kinect");
     try {
-        esf::parse_sensor_noise("kinect2");
+        esf::parse_enum<esf::SensorNoise>("kinect2");
         FAIL() << "no exception";
     } catch (const std::invalid_argument& e) {
         EXPECT_STREQ(e.what(), "unknown sensor noise 'kinect2' (expected none or kinect)");

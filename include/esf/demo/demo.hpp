@@ -28,12 +28,14 @@
 // 10 to 15 s on 2 cores (Release), nearly all of it training; memory stays below 200 MB.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "esf/core/enum_names.hpp"
 #include "esf/core/point_cloud.hpp"
 #include "esf/evaluation/evaluation.hpp"
 #include "esf/recognition/recognizer.hpp"
@@ -43,7 +45,14 @@ namespace esf {
 enum class DemoStage { kGenerate, kTrain, kQuery, kScene };
 
 /// "generate", "train", "query", "scene".
-const char* to_string(DemoStage stage);
+template <>
+struct EnumNames<DemoStage> {
+    static constexpr const char* what = "demo stage";
+    static constexpr std::array<EnumName<DemoStage>, 4> table{{{DemoStage::kGenerate, "generate"},
+                                                               {DemoStage::kTrain, "train"},
+                                                               {DemoStage::kQuery, "query"},
+                                                               {DemoStage::kScene, "scene"}}};
+};
 
 /// Progress of one stage: reported with done = 0 when a stage starts, as work completes, and
 /// with done = total when it ends. Calls are serialised; they come from the calling thread,

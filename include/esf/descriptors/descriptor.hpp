@@ -117,8 +117,8 @@ std::vector<float> descriptor_dimension_weights(const DescriptorInfo& info,
 struct DescriptorOptions {
     /// esf, sdvs, d2: seed of the triple sampler (pcl-esf is seeded from the clock by PCL).
     std::uint64_t seed = 0;
-    /// esf, sdvs, d2: accepted point triples (paper: 20,000; pcl-esf always uses 20,000).
-    int samples = 20000;
+    /// esf, sdvs, d2: accepted point triples (pcl-esf always uses 20,000).
+    int samples = kEsfSamples;
     /// PCL baselines: voxel-grid leaf in units of the mesh resolution r (0: no downsampling).
     float leaf_factor = 3.0f;
     /// PCL baselines: normal radius (also CVFH's cluster tolerance) in units of the leaf

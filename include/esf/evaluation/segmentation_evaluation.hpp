@@ -9,12 +9,14 @@
 // Database (Richtsfeld et al., IROS 2012) as distributed with PCL: label 0 invalid, 1-9 the
 // table, 10 k + j a point of object k >= 2.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "esf/core/enum_names.hpp"
 #include "esf/segmentation/segmentation.hpp"
 
 namespace esf {
@@ -39,7 +41,16 @@ enum class SegmentOutcome {
     kMissed,  ///< in no cluster, or only a small part of it is
 };
 
-const char* to_string(SegmentOutcome outcome);
+/// "found", "merged", "split", "missed".
+template <>
+struct EnumNames<SegmentOutcome> {
+    static constexpr const char* what = "segment outcome";
+    static constexpr std::array<EnumName<SegmentOutcome>, 4> table{
+        {{SegmentOutcome::kFound, "found"},
+         {SegmentOutcome::kMerged, "merged"},
+         {SegmentOutcome::kSplit, "split"},
+         {SegmentOutcome::kMissed, "missed"}}};
+};
 
 struct ObjectSegmentation {
     std::uint32_t object_id = 0;

@@ -13,10 +13,12 @@
 // anything is allocated. Text numbers must fit a float: "1e39" is an error naming the line and
 // the value, "1e-50" reads as 0 (values below the float range round to 0 or a subnormal).
 
+#include <array>
 #include <iosfwd>
 #include <string>
 #include <string_view>
 
+#include "esf/core/enum_names.hpp"
 #include "esf/core/point_cloud.hpp"
 
 namespace esf {
@@ -51,6 +53,16 @@ PointCloud read_xyz(std::istream& in, const std::string& name);
 PointCloud parse_xyz(std::string_view bytes, const std::string& name);
 
 enum class PcdEncoding { kAscii, kBinary, kBinaryCompressed };
+
+/// "binary", "ascii", "binary_compressed": the DATA line of the header.
+template <>
+struct EnumNames<PcdEncoding> {
+    static constexpr const char* what = "PCD encoding";
+    static constexpr std::array<EnumName<PcdEncoding>, 3> table{
+        {{PcdEncoding::kBinary, "binary"},
+         {PcdEncoding::kAscii, "ascii"},
+         {PcdEncoding::kBinaryCompressed, "binary_compressed"}}};
+};
 
 /// Writes x y z (then `rgb` and `label` when the cloud has colours or labels), keeping width x
 /// height. The file is written to a temporary name beside the target and renamed, so a failure

@@ -18,6 +18,7 @@
 // and classify_batch() are const and may run concurrently.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -25,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "esf/core/enum_names.hpp"
 #include "esf/recognition/knn_index.hpp"
 #include "esf/recognition/pose_verification.hpp"
 
@@ -47,10 +49,13 @@ enum class VoteRule {
     kMajority,  ///< the most frequent class among the k neighbours
 };
 
-/// "nearest", "majority".
-const char* to_string(VoteRule rule);
-/// The rule named `name` ("nearest", "majority"); throws std::invalid_argument naming it.
-VoteRule parse_vote_rule(const std::string& name);
+/// "nearest", "majority" (to_string, parse_enum<VoteRule>).
+template <>
+struct EnumNames<VoteRule> {
+    static constexpr const char* what = "vote rule";
+    static constexpr std::array<EnumName<VoteRule>, 2> table{
+        {{VoteRule::kNearest, "nearest"}, {VoteRule::kMajority, "majority"}}};
+};
 
 struct ClassifierOptions {
     std::size_t k = 10;  ///< neighbours that vote (fewer when the index has fewer)

@@ -10,6 +10,7 @@
 // on which other scenes are composed.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "esf/core/camera.hpp"
+#include "esf/core/enum_names.hpp"
 #include "esf/core/point_cloud.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "esf/render/sensor_model.hpp"
@@ -33,11 +35,30 @@ namespace esf {
 ///   complex    10-18 objects, touching, some leaning on their neighbours
 enum class ClutterType { kIsolated, kTouching, kStacked, kOccluded, kCylindric, kMixed, kComplex };
 
+/// "isolated", "touching", ... (to_string, parse_enum<ClutterType>), in the order above.
+template <>
+struct EnumNames<ClutterType> {
+    static constexpr const char* what = "scene type";
+    static constexpr std::array<EnumName<ClutterType>, 7> table{
+        {{ClutterType::kIsolated, "isolated"},
+         {ClutterType::kTouching, "touching"},
+         {ClutterType::kStacked, "stacked"},
+         {ClutterType::kOccluded, "occluded"},
+         {ClutterType::kCylindric, "cylindric"},
+         {ClutterType::kMixed, "mixed"},
+         {ClutterType::kComplex, "complex"}}};
+};
+
 /// Every type, in the order above.
-const std::vector<ClutterType>& clutter_types();
-const char* to_string(ClutterType type);
-/// The names of to_string(); throws std::invalid_argument naming the valid ones otherwise.
-ClutterType parse_clutter_type(const std::string& name);
+inline const std::vector<ClutterType>& clutter_types() {
+    static const std::vector<ClutterType> types = [] {
+        std::vector<ClutterType> all;
+        for (const EnumName<ClutterType>& entry : EnumNames<ClutterType>::table)
+            all.push_back(entry.value);
+        return all;
+    }();
+    return types;
+}
 
 /// A model that scenes may hold: a mesh in metres, +z up (as training assumes), standing on its
 /// lowest point when upright.

@@ -7,16 +7,23 @@
 // The sensor's range limits (about 0.5 to 4 m) are not modelled, so that small models may be
 // rendered close up; lateral noise and shadows at depth edges are not modelled either.
 
+#include <array>
 #include <cstdint>
 #include <string>
+
+#include "esf/core/enum_names.hpp"
 
 namespace esf {
 
 enum class SensorNoise { kNone, kKinect };
 
-/// "none" / "kinect"; throws std::invalid_argument otherwise.
-SensorNoise parse_sensor_noise(const std::string& name);
-const char* to_string(SensorNoise noise);
+/// "none", "kinect" (to_string, parse_enum<SensorNoise>).
+template <>
+struct EnumNames<SensorNoise> {
+    static constexpr const char* what = "sensor noise";
+    static constexpr std::array<EnumName<SensorNoise>, 2> table{
+        {{SensorNoise::kNone, "none"}, {SensorNoise::kKinect, "kinect"}}};
+};
 
 inline constexpr double kKinectBaseline = 0.075;           ///< metres, projector to IR camera
 inline constexpr double kKinectDisparityStep = 1.0 / 8.0;  ///< pixels (sub-pixel quantisation)

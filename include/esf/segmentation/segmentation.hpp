@@ -33,12 +33,14 @@
 //
 // Results are identical for every thread count. segment_scene() is re-entrant.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "esf/core/enum_names.hpp"
 #include "esf/core/point_cloud.hpp"
 #include "esf/segmentation/convexity_grouping.hpp"
 #include "esf/segmentation/surface_patches.hpp"
@@ -52,6 +54,14 @@ enum class Grouping {
     kConvexity,
     /// Euclidean clustering: everything that touches is one object.
     kEuclidean,
+};
+
+/// "convexity", "euclidean" (to_string, parse_enum<Grouping>).
+template <>
+struct EnumNames<Grouping> {
+    static constexpr const char* what = "grouping";
+    static constexpr std::array<EnumName<Grouping>, 2> table{
+        {{Grouping::kConvexity, "convexity"}, {Grouping::kEuclidean, "euclidean"}}};
 };
 
 /// Thresholds of segment_scene(). Lengths are in metres (the defaults suit Kinect-like sensors at
@@ -108,6 +118,14 @@ enum class ClusterStatus {
     kMaybeTruncated,
 };
 
+/// "ok", "maybe_truncated".
+template <>
+struct EnumNames<ClusterStatus> {
+    static constexpr const char* what = "cluster status";
+    static constexpr std::array<EnumName<ClusterStatus>, 2> table{
+        {{ClusterStatus::kOk, "ok"}, {ClusterStatus::kMaybeTruncated, "maybe_truncated"}}};
+};
+
 /// One object above the table.
 struct Cluster {
     Points points;                                       ///< full-resolution points, in input order
@@ -145,7 +163,5 @@ SegmentationResult segment_scene(const PointCloud& cloud, const SegmentationOpti
 /// The same for an unorganised set of points (non-finite points are skipped).
 SegmentationResult segment_scene(std::span<const Eigen::Vector3f> points,
                                  const SegmentationOptions& options = {});
-
-const char* to_string(ClusterStatus status);
 
 }  // namespace esf

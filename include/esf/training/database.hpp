@@ -21,6 +21,7 @@
 // one writes.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -30,6 +31,8 @@
 #include <string>
 #include <variant>
 #include <vector>
+
+#include "esf/core/enum_names.hpp"
 
 namespace esf {
 
@@ -73,7 +76,14 @@ struct ViewEntry {
 };
 
 enum class ModelStatus { kComplete, kFailed };
-const char* to_string(ModelStatus status);
+
+/// "complete", "failed".
+template <>
+struct EnumNames<ModelStatus> {
+    static constexpr const char* what = "model status";
+    static constexpr std::array<EnumName<ModelStatus>, 2> table{
+        {{ModelStatus::kComplete, "complete"}, {ModelStatus::kFailed, "failed"}}};
+};
 
 /// A model with all its views, as written by Database::write_model().
 struct ModelEntry {

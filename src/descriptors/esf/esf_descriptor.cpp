@@ -49,14 +49,6 @@ const std::array<const char*, kEsfBlocks>& esf_block_names() {
     return names;
 }
 
-EsfSampler parse_esf_sampler(const std::string& name) {
-    if (name == "fast") return EsfSampler::kFast;
-    if (name == "pcl") return EsfSampler::kPcl;
-    throw std::invalid_argument("unknown ESF sampler '" + name + "' (expected fast or pcl)");
-}
-
-const char* to_string(EsfSampler sampler) { return sampler == EsfSampler::kPcl ? "pcl" : "fast"; }
-
 EsfKernels parse_esf_kernels(const std::string& name) {
     if (name == "best") return EsfKernels::kBest;
     if (name == "avx2") return EsfKernels::kAvx2;

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "esf/core/enum_names.hpp"
 #include "esf/core/point_cloud.hpp"
 
 namespace esf {
@@ -44,9 +45,13 @@ enum class EsfSampler {
     kPcl,
 };
 
-/// Parses "fast" / "pcl"; throws std::invalid_argument naming the value otherwise.
-EsfSampler parse_esf_sampler(const std::string& name);
-const char* to_string(EsfSampler sampler);
+/// "fast", "pcl" (to_string, parse_enum<EsfSampler>).
+template <>
+struct EnumNames<EsfSampler> {
+    static constexpr const char* what = "ESF sampler";
+    static constexpr std::array<EnumName<EsfSampler>, 2> table{
+        {{EsfSampler::kFast, "fast"}, {EsfSampler::kPcl, "pcl"}}};
+};
 
 /// The code paths of the fast sampler. kBest takes what the CPU has, by its feature flags:
 /// AVX-512 (F, BW, VL, DQ) kernels for the per-point passes, sampling, tracing and histograms,
@@ -62,9 +67,13 @@ enum class EsfKernels {
 EsfKernels parse_esf_kernels(const std::string& name);
 const char* to_string(EsfKernels kernels);
 
+/// Accepted point triples per description: the paper's 20,000, the default of every command,
+/// binding and training run that samples point triples.
+inline constexpr int kEsfSamples = 20000;
+
 struct EsfOptions {
-    int samples = 20000;  ///< accepted point triples (paper: 20,000)
-    int grid_size = 64;   ///< voxel grid side, 8..64 (the `pcl` sampler needs 64)
+    int samples = kEsfSamples;  ///< accepted point triples
+    int grid_size = 64;         ///< voxel grid side, 8..64 (the `pcl` sampler needs 64)
     std::uint64_t seed = 0;
     EsfSampler sampler = EsfSampler::kFast;
     /// Attempts allowed per requested sample before the cloud is declared degenerate
