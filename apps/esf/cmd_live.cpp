@@ -275,8 +275,8 @@ void run_live(LiveArgs& args) {
 
 void add_live_command(CLI::App& app) {
     auto args = std::make_shared<LiveArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "live",
+    CLI::App* cmd = add_command(
+        app, "live", "Recognise and track objects live from a Kinect v1 or a recording",
         "Recognise and track the objects on a table from a Kinect v1 (libfreenect, 11-bit raw "
         "depth and RGB, 640 x 480), or from a recording (--recording DIR, or fakenect DIR esf "
         "live DB). Each frame is segmented and its objects classified as by esf scene; an "

@@ -71,7 +71,7 @@ void run_record_scenes(const RecordScenesArgs& args) {
     options.frame_rate = args.frame_rate;
     options.clutter.seed = args.seed;
     for (const std::string& type : args.types)
-        options.clutter.types.push_back(parse_clutter_type(type));
+        options.clutter.types.push_back(parse_enum<ClutterType>(type));
     options.groups = args.groups.selection();
     options.catalog = args.catalog;
     options.use_catalog = !args.no_catalog;
@@ -93,8 +93,9 @@ void run_record_scenes(const RecordScenesArgs& args) {
 
 void add_record_scenes_command(CLI::App& app) {
     auto args = std::make_shared<RecordScenesArgs>();
-    CLI::App* cmd = app.add_subcommand(
-        "record-scenes",
+    CLI::App* cmd = add_command(
+        app, "record-scenes",
+        "Write Kinect recordings (fakenect's format) of generated or real scenes",
         "Kinect recordings for esf live and fakenect (fakenect-record's format: INDEX.txt, raw "
         "11-bit depth d-*.pgm, colour r-*.ppm): from ROOT, --sequences generated tables (as "
         "esf generate-scenes, without walls and edges) each seen by a camera turning --sweep "
@@ -121,11 +122,9 @@ void add_record_scenes_command(CLI::App& app) {
         ->capture_default_str();
     add_seed_option(*cmd, args->seed, "Random seed (layouts, cameras, sensor noise)");
     add_threads_option(*cmd, args->threads);
-    std::vector<std::string> type_names;
-    for (const ClutterType t : clutter_types()) type_names.emplace_back(to_string(t));
     cmd->add_option("--types", args->types, "Scene types in turn (comma-separated; default: all)")
         ->delimiter(',')
-        ->check(CLI::IsMember(type_names));
+        ->check(CLI::IsMember(enum_names<ClutterType>()));
     add_catalog_options(*cmd, args->catalog, args->no_catalog);
     args->groups.add_to(*cmd);
     cmd->callback([args] { run_record_scenes(*args); });

@@ -105,8 +105,9 @@ std::vector<std::string> lines_of(const std::string& text) {
 // command's own --help starts with that summary and ends with the long description.
 TEST_F(CliUsageTest, HelpListsEveryCommandOnOneLine) {
     const std::vector<std::string> commands = {
-        "demo",     "describe", "train",   "info", "segment",       "generate",       "render",
-        "classify", "scene",    "compare", "eval", "learn-weights", "generate-scenes"};
+        "demo",     "describe",      "train",           "info",  "segment",
+        "generate", "render",        "classify",        "scene", "compare",
+        "eval",     "learn-weights", "generate-scenes", "live",  "record-scenes"};
     const CliRun help = esf("--help");
     ASSERT_EQ(help.code, 0);
     const std::vector<std::string> lines = lines_of(help.out);
