@@ -94,8 +94,7 @@ void run_record_scenes(const RecordScenesArgs& args) {
 void add_record_scenes_command(CLI::App& app) {
     auto args = std::make_shared<RecordScenesArgs>();
     CLI::App* cmd = add_command(
-        app, "record-scenes",
-        "Write Kinect recordings (fakenect's format) of generated or real scenes",
+        app, "record-scenes", "Write Kinect recordings of generated or real table scenes",
         "Kinect recordings for esf live and fakenect (fakenect-record's format: INDEX.txt, raw "
         "11-bit depth d-*.pgm, colour r-*.ppm): from ROOT, --sequences generated tables (as "
         "esf generate-scenes, without walls and edges) each seen by a camera turning --sweep "
