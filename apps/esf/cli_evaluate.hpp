@@ -2,11 +2,11 @@
 // Shared by esf eval and esf learn-weights: a database's descriptors for leave-one-model-out
 // runs, its stored weights and the model groups of a catalog.
 
-#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/number_text.hpp"
 #include "esf/descriptors/descriptor.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
 #include "esf/evaluation/evaluation.hpp"
@@ -41,10 +41,6 @@ inline std::size_t view_count(const DescriptorMatrix& matrix) {
 }
 
 /// "12.3" for a fraction 0.123.
-inline std::string percent_text(double fraction) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.1f", 100.0 * fraction);
-    return buffer;
-}
+using detail::percent_text;
 
 }  // namespace esf::cli

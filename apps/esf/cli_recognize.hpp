@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cli_common.hpp"
+#include "core/number_text.hpp"
 #include "esf/recognition/recognizer.hpp"
 
 namespace esf::cli {
@@ -109,11 +110,10 @@ inline void add_classification_json(nlohmann::json& out, const Classification& c
 /// empty without verification.
 inline std::string fit_text(const Classification& c) {
     if (!c.fit) return {};
-    char text[128];
-    std::snprintf(text, sizeof text, "; %s: %.0f %% inliers, %.0f %% violations, %.1f mm",
-                  c.verified ? "verified" : "no fit", 100.0 * c.fit->inliers,
-                  100.0 * c.fit->violations, c.fit->rms_mm);
-    return text;
+    return std::string("; ") + (c.verified ? "verified" : "no fit") + ": " +
+           detail::percent_text(c.fit->inliers, 0) + " % inliers, " +
+           detail::percent_text(c.fit->violations, 0) + " % violations, " +
+           detail::fixed_text(c.fit->rms_mm, 1) + " mm";
 }
 
 /// "path: reason", without repeating the path when the reason starts with it.

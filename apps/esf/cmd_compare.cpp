@@ -16,6 +16,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "core/elapsed_time.hpp"
 #include "esf/descriptors/descriptor.hpp"
 #include "esf/evaluation/evaluation.hpp"
 #include "esf/recognition/recognizer.hpp"
@@ -53,9 +54,7 @@ struct CompareRow {
     EvaluationReport synthetic;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using detail::seconds_since;
 
 /// Descriptor names of a comma-separated list (CLI11 splits on the delimiter; entries may also
 /// be repeated options), checked against the registry.

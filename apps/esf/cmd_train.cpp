@@ -11,6 +11,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "core/elapsed_time.hpp"
 #include "esf/descriptors/descriptor.hpp"
 #include "esf/training/database.hpp"
 #include "esf/training/training.hpp"
@@ -42,9 +43,7 @@ struct TrainArgs {
     bool json = false;
 };
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using detail::seconds_since;
 
 void run_train(const TrainArgs& args) {
     TrainingOptions options;

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <system_error>
 
@@ -108,5 +109,29 @@ void append_uint(std::string& out, unsigned long long value) {
     const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), value);
     out.append(buf.data(), result.ptr);
 }
+
+namespace {
+
+std::string printed(const char* format, int digits, double value) {
+    std::array<char, 512> buf{};
+    const int n = std::snprintf(buf.data(), buf.size(), format, digits, value);
+    if (n < 0) return {};
+    if (static_cast<std::size_t>(n) < buf.size())
+        return std::string(buf.data(), static_cast<std::size_t>(n));
+    std::string out(static_cast<std::size_t>(n) + 1, '\0');
+    std::snprintf(out.data(), out.size(), format, digits, value);
+    out.resize(static_cast<std::size_t>(n));
+    return out;
+}
+
+}  // namespace
+
+std::string fixed_text(double value, int digits) { return printed("%.*f", digits, value); }
+
+std::string percent_text(double fraction, int digits) {
+    return printed("%.*f", digits, 100.0 * fraction);
+}
+
+std::string significant_text(double value, int digits) { return printed("%.*g", digits, value); }
 
 }  // namespace esf::detail

@@ -1,6 +1,7 @@
 #pragma once
-// Numbers in text files: whole-token parsing with std::from_chars and shortest round-trip output
-// with std::to_chars (no locale, no allocation).
+// Numbers in text: whole-token parsing with std::from_chars and shortest round-trip output with
+// std::to_chars (no locale, no allocation) for files; fixed digits, percentages and significant
+// digits for what people read (reports, messages, the command line's tables).
 
 #include <string>
 #include <string_view>
@@ -30,5 +31,17 @@ void append_float(std::string& out, float value);
 
 /// Appends the decimal text of `value`.
 void append_uint(std::string& out, unsigned long long value);
+
+/// `value` with `digits` digits after the point, as printf's "%.*f": fixed_text(2.345, 1) is
+/// "2.3".
+std::string fixed_text(double value, int digits);
+
+/// A fraction as a percentage without the sign, `digits` digits after the point:
+/// percent_text(0.1234) is "12.3".
+std::string percent_text(double fraction, int digits = 1);
+
+/// `value` with `digits` significant digits, as printf's "%.*g" (and as an ostream writes a
+/// double with that precision): significant_text(0.000123456, 3) is "0.000123".
+std::string significant_text(double value, int digits);
 
 }  // namespace esf::detail

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/elapsed_time.hpp"
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/render/render.hpp"
@@ -45,9 +46,7 @@ constexpr double kSceneGap = 0.08;      // metres between the footprints of two 
 constexpr double kTableHalfSize = 0.6;  // metres
 constexpr double kSceneMaxDepth = 4.0;  // metres, the Kinect's range
 
-double seconds_since(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
+using detail::seconds_since;
 
 void validate_options(const DemoOptions& o) {
     auto fail = [](const std::string& what) { throw std::invalid_argument("demo: " + what); };

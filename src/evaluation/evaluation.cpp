@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "core/csv.hpp"
+#include "core/elapsed_time.hpp"
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -30,9 +31,7 @@ using detail::lower;
 using detail::parse_csv;
 using detail::trim;
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
+using detail::seconds_since;
 
 // ---- metrics --------------------------------------------------------------------------------
 

@@ -9,13 +9,13 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/child_process.hpp"
 #include "core/installed_files.hpp"
+#include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "mesh/mesh_checks.hpp"
@@ -61,11 +61,7 @@ FoundHelper helper() {
     return found;
 }
 
-std::string number(double value) {
-    std::ostringstream out;
-    out << value;
-    return out.str();
-}
+std::string number(double value) { return detail::significant_text(value, 6); }
 
 /// The mesh in a status-0 reply; throws IoError for one that is cut short, too long or names a
 /// vertex that is not there.

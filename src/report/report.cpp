@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "core/atomic_file.hpp"
+#include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "io/png_writer.hpp"
 #include "report/markup.hpp"
@@ -26,13 +27,8 @@ namespace fs = std::filesystem;
 
 using detail::xml_escape;
 
-std::string fixed(double v, int digits) {
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, "%.*f", digits, v);
-    return buffer;
-}
-
-std::string percent(double fraction) { return fixed(100.0 * fraction, 1); }
+using detail::fixed_text;
+using detail::percent_text;
 
 void write_file(const fs::path& path, const void* data, std::size_t size) {
     detail::write_file_atomically(path, data, size);
@@ -313,7 +309,7 @@ std::string confusion_svg(const EvaluationReport& report, const ReportOptions& o
               << l.cell << "\" fill=\"" << css(colour) << "\" stroke=\""
               << (diagonal ? "#c81e1e" : "#c8c8c8") << "\" stroke-width=\"" << (diagonal ? 2 : 1)
               << "\"><title>" << xml_escape(report.confusion_rows[r]) << " -&gt; "
-              << xml_escape(report.confusion_columns[c]) << ": " << count << " (" << percent(f)
+              << xml_escape(report.confusion_columns[c]) << ": " << count << " (" << percent_text(f)
               << " %)</title></rect>\n";
             if (count)
                 o << "<text x=\"" << x + l.cell / 2.0 << "\" y=\"" << y + l.cell / 2.0 + 4
@@ -407,16 +403,16 @@ std::string rank_curves_svg(const EvaluationReport& report, const ReportOptions&
         const std::string dash = c / kPalette.size() % 2 ? "5,3" : "";
         polyline(m.rank_curve, colour, 1.5, dash, m.class_name);
         legend(colour, 1.5, dash,
-               m.class_name + " (" + std::to_string(m.samples) + "): " + percent(m.top1) + " -> " +
-                   percent(m.topk));
+               m.class_name + " (" + std::to_string(m.samples) + "): " + percent_text(m.top1) +
+                   " -> " + percent_text(m.topk));
     }
     polyline(report.class_rank_curve, "black", 3.0, "", "mean over classes");
-    legend(
-        "black", 3.0, "",
-        "mean over classes: " + percent(report.class_top1) + " -> " + percent(report.class_topk));
+    legend("black", 3.0, "",
+           "mean over classes: " + percent_text(report.class_top1) + " -> " +
+               percent_text(report.class_topk));
     polyline(report.rank_curve, "#555555", 2.0, "6,3", "per sample");
     legend("#555555", 2.0, "6,3",
-           "per sample: " + percent(report.top1) + " -> " + percent(report.topk));
+           "per sample: " + percent_text(report.top1) + " -> " + percent_text(report.topk));
     o << "</svg>\n";
     return o.str();
 }
@@ -455,9 +451,9 @@ void gallery_html(std::ostream& o, const std::vector<GalleryEntry>& gallery) {
           << (e.rank ? std::to_string(e.rank) : std::string("&gt; k")) << ")<br>"
           << xml_escape(short_path(e.file))
           << "<br>nearest: " << xml_escape(e.matched_view.empty() ? "-" : e.matched_view)
-          << ", distance " << fixed(e.matched_distance, 4) << "<br>nearest "
+          << ", distance " << fixed_text(e.matched_distance, 4) << "<br>nearest "
           << xml_escape(e.true_class) << ": " << xml_escape(e.true_view.empty() ? "-" : e.true_view)
-          << ", distance " << fixed(e.true_distance, 4);
+          << ", distance " << fixed_text(e.true_distance, 4);
         if (!e.note.empty()) o << "<br><span class=\"note\">" << xml_escape(e.note) << "</span>";
         o << "</p></div>\n";
     }
@@ -495,11 +491,13 @@ std::string report_html(const EvaluationReport& r, const ReportOptions& options)
     row("samples", std::to_string(r.samples) + " evaluated, " + std::to_string(r.skipped) +
                        " skipped (class not in the database), " + std::to_string(r.failed) +
                        " failed");
-    row("1-NN", percent(r.top1) + " % per sample, " + percent(r.class_top1) + " % per class");
-    row(k + "-NN", percent(r.topk) + " % per sample, " + percent(r.class_topk) + " % per class");
-    if (r.describe_ms > 0.0) row("describe", fixed(r.describe_ms, 2) + " ms per cloud");
-    if (r.match_ms > 0.0) row("match", fixed(r.match_ms, 3) + " ms per query");
-    row("time", fixed(r.total_seconds, 2) + " s on " + std::to_string(r.threads) + " threads");
+    row("1-NN",
+        percent_text(r.top1) + " % per sample, " + percent_text(r.class_top1) + " % per class");
+    row(k + "-NN",
+        percent_text(r.topk) + " % per sample, " + percent_text(r.class_topk) + " % per class");
+    if (r.describe_ms > 0.0) row("describe", fixed_text(r.describe_ms, 2) + " ms per cloud");
+    if (r.match_ms > 0.0) row("match", fixed_text(r.match_ms, 3) + " ms per query");
+    row("time", fixed_text(r.total_seconds, 2) + " s on " + std::to_string(r.threads) + " threads");
     o << "</table>\n";
 
     o << "<h2>Per class</h2>\n<table class=\"classes\">\n<tr><th class=\"name\">class</th>"
@@ -508,17 +506,19 @@ std::string report_html(const EvaluationReport& r, const ReportOptions& options)
     for (const ClassMetrics& m : r.classes) {
         o << "<tr><td class=\"name\">" << xml_escape(m.class_name) << "</td><td>" << m.samples
           << (m.failed ? " (+" + std::to_string(m.failed) + " failed)" : "") << "</td><td>"
-          << percent(m.top1) << "</td><td>" << percent(m.topk) << "</td><td class=\"name\">"
+          << percent_text(m.top1) << "</td><td>" << percent_text(m.topk)
+          << "</td><td class=\"name\">"
           << xml_escape(m.confused_with.empty()
                             ? std::string("-")
                             : m.confused_with + " (" + std::to_string(m.confused_count) + ")")
           << "</td></tr>\n";
     }
     o << "<tr class=\"mean\"><td class=\"name\">mean over classes</td><td>" << r.samples
-      << "</td><td>" << percent(r.class_top1) << "</td><td>" << percent(r.class_topk)
+      << "</td><td>" << percent_text(r.class_top1) << "</td><td>" << percent_text(r.class_topk)
       << "</td><td></td></tr>\n"
       << "<tr class=\"mean\"><td class=\"name\">per sample</td><td>" << r.samples << "</td><td>"
-      << percent(r.top1) << "</td><td>" << percent(r.topk) << "</td><td></td></tr>\n</table>\n";
+      << percent_text(r.top1) << "</td><td>" << percent_text(r.topk)
+      << "</td><td></td></tr>\n</table>\n";
 
     if (!r.missing_classes.empty()) {
         o << "<h2>Skipped classes (not in the database)</h2>\n<ul>\n";

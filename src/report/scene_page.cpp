@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 #include "core/atomic_file.hpp"
+#include "core/convex_hull_2d.hpp"
+#include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "esf/report/point_picture.hpp"
 #include "report/markup.hpp"
@@ -25,34 +28,21 @@ const std::array<const char*, 10> kColours = {"#1f77b4", "#ff7f0e", "#2ca02c", "
                                               "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
                                               "#bcbd22", "#17becf"};
 
-std::string fixed(double v, int digits) {
-    char buffer[64];
-    std::snprintf(buffer, sizeof buffer, "%.*f", digits, v);
-    return buffer;
-}
+using detail::fixed_text;
 
 using Pixel = std::array<long, 2>;
 
-long cross(const Pixel& o, const Pixel& a, const Pixel& b) {
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
-}
-
-/// Convex hull (Andrew's monotone chain), counter-clockwise in pixel coordinates.
-std::vector<Pixel> convex_hull(std::vector<Pixel> p) {
-    std::sort(p.begin(), p.end());
-    p.erase(std::unique(p.begin(), p.end()), p.end());
-    if (p.size() < 3) return p;
-    std::vector<Pixel> hull(2 * p.size());
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        while (k >= 2 && cross(hull[k - 2], hull[k - 1], p[i]) <= 0) --k;
-        hull[k++] = p[i];
-    }
-    for (std::size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
-        while (k >= t && cross(hull[k - 2], hull[k - 1], p[i - 1]) <= 0) --k;
-        hull[k++] = p[i - 1];
-    }
-    hull.resize(k - 1);
+/// The convex hull of pixel positions (core/convex_hull_2d.hpp: counter-clockwise in pixel
+/// coordinates, without collinear vertices). Pixel coordinates are small whole numbers, exact
+/// as floats.
+std::vector<Pixel> convex_hull(const std::vector<Pixel>& pixels) {
+    std::vector<detail::Vec2> points;
+    points.reserve(pixels.size());
+    for (const Pixel& p : pixels)
+        points.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]));
+    std::vector<Pixel> hull;
+    for (const detail::Vec2& v : detail::monotone_chain(std::move(points)))
+        hull.push_back({std::lround(v.x()), std::lround(v.y())});
     return hull;
 }
 
@@ -68,7 +58,7 @@ std::string picture_uri(std::span<const Eigen::Vector3f> points, int width, int 
 std::string object_label(std::size_t i, const RecognizedObject& o) {
     std::string label = std::to_string(i) + " ";
     if (!o.classified()) return label + "unclassified";
-    return label + o.classification.class_name + " " + fixed(o.classification.confidence, 2);
+    return label + o.classification.class_name + " " + fixed_text(o.classification.confidence, 2);
 }
 
 const char* status_text(const RecognizedObject& o) {
@@ -189,9 +179,9 @@ std::string scene_page_html(const std::string& file, const PointCloud& cloud,
         if (!note.empty()) o << "<span class=\"note\">" << xml_escape(note) << "</span>";
         o << "</td>";
         if (object.classified()) {
-            o << "<td>" << xml_escape(c.class_name) << "</td><td>" << fixed(c.confidence, 2)
+            o << "<td>" << xml_escape(c.class_name) << "</td><td>" << fixed_text(c.confidence, 2)
               << "</td><td>" << xml_escape(c.best_model) << "</td><td>" << c.best_view
-              << "</td><td>" << fixed(c.best_distance, 4) << "</td>";
+              << "</td><td>" << fixed_text(c.best_distance, 4) << "</td>";
         } else {
             o << "<td>-</td><td>-</td><td>-</td><td>-</td><td>-</td>";
         }

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "core/atomic_file.hpp"
+#include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "evaluation/matrix_json.hpp"
 #include "report/markup.hpp"
@@ -21,11 +22,8 @@ namespace fs = std::filesystem;
 
 using detail::xml_escape;
 
-std::string percent(double fraction) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.1f %%", 100.0 * fraction);
-    return buffer;
-}
+/// "12.3 %" for a fraction 0.123.
+std::string percent(double fraction) { return detail::percent_text(fraction) + " %"; }
 
 std::string share(std::size_t a, std::size_t b) {
     return b ? percent(static_cast<double>(a) / static_cast<double>(b)) : "-";
@@ -153,12 +151,9 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
              << xml_escape(report.truth)
              << "); ADD-S: mean distance from the model under the true pose to the model under "
                 "the found one, as a share of its diameter.</p>\n";
-    char timing[160];
-    std::snprintf(timing, sizeof timing,
-                  "<p>Segmentation %.2f ms, description and classification %.2f ms "
-                  "per frame.</p>\n",
-                  report.segment_ms, report.recognize_ms);
-    html << timing;
+    html << "<p>Segmentation " << detail::fixed_text(report.segment_ms, 2)
+         << " ms, description and classification " << detail::fixed_text(report.recognize_ms, 2)
+         << " ms per frame.</p>\n";
     for (const SceneFailure& f : report.failures)
         html << "<p class=\"failure\">Not evaluated: " << xml_escape(f.file) << ": "
              << xml_escape(f.error) << "</p>\n";

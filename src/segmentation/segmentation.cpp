@@ -4,13 +4,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
 
 #include "core/convex_hull_2d.hpp"
+#include "core/number_text.hpp"
 #include "core/pixel_rows.hpp"
 #include "esf/core/parallel.hpp"
 #include "segmentation/container_parts.hpp"
@@ -27,11 +27,7 @@ constexpr std::size_t kChunks = 64;
 // Pixels from the image border within which a cluster may be cut off.
 constexpr std::uint32_t kBorderMargin = 2;
 
-std::string format_metres(double value) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.3g m", value);
-    return buffer;
-}
+std::string format_metres(double value) { return detail::significant_text(value, 3) + " m"; }
 
 std::size_t chunk_begin(std::size_t chunk, std::size_t count) { return chunk * count / kChunks; }
 
