@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -14,6 +13,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
+#include "core/number_text.hpp"
 #include "esf/demo/demo.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/io/depth_image.hpp"
@@ -40,11 +41,8 @@ double per_second(std::size_t count, double seconds) {
     return seconds > 0.0 ? static_cast<double>(count) / seconds : 0.0;
 }
 
-std::string percent(double share) {
-    char text[16];
-    std::snprintf(text, sizeof text, "%.1f%%", 100.0 * share);
-    return text;
-}
+/// "12.3%" for a share 0.123.
+std::string percent(double share) { return detail::percent_text(share) + "%"; }
 
 const char* object_status(const RecognizedObject& o) {
     return o.classified() ? to_string(o.cluster.status) : "failed";
@@ -279,12 +277,7 @@ void write_demo_report(const std::string& dir, const DemoResult& r, const nlohma
     options.title = "esf demo: held-out generated models";
     write_report(dir, r.evaluation, options);  // creates the folder
     const fs::path root(dir);
-    {
-        const std::string path = (root / "demo.json").string();
-        std::ofstream out(path);
-        out << json.dump(2) << '\n';
-        if (!out) throw std::runtime_error(path + ": cannot write the file");
-    }
+    detail::write_file_atomically(root / "demo.json", json.dump(2) + '\n');
     if (r.scene.cloud.points.empty()) return;
     write_pcd((root / "scene.pcd").string(), r.scene.cloud);
     DepthImage depth;

@@ -1,10 +1,7 @@
 // esf describe FILE... : ESF descriptors of point-cloud files, as CSV or JSON.
 
-#include <array>
 #include <atomic>
-#include <charconv>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -13,6 +10,8 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
+#include "core/number_text.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -28,13 +27,6 @@ struct DescribeArgs {
     std::string format = "csv";
     std::string output;
 };
-
-/// Appends the shortest decimal that reads back as the same float (std::to_chars).
-void append_float(std::string& out, float value) {
-    std::array<char, 32> buf{};
-    const auto result = std::to_chars(buf.data(), buf.data() + buf.size(), value);
-    out.append(buf.data(), result.ptr);
-}
 
 void run_describe(const DescribeArgs& args) {
     const EsfOptions& options = args.esf;
@@ -70,12 +62,8 @@ void run_describe(const DescribeArgs& args) {
     });
     progress.finish();
 
-    std::ofstream file;
-    if (!args.output.empty()) {
-        file.open(args.output);
-        if (!file) throw std::runtime_error(args.output + ": cannot open for writing");
-    }
-    std::ostream& out = args.output.empty() ? std::cout : file;
+    // The whole output, then to standard output or, replacing it at once, to the output file.
+    std::string text;
     int failed = 0;
     nlohmann::json json = nlohmann::json::array();
     for (std::size_t i = 0; i < items.size(); ++i) {
@@ -93,18 +81,22 @@ void run_describe(const DescribeArgs& args) {
             entry["descriptor"] = std::vector<float>(d.begin(), d.end());
             json.push_back(std::move(entry));
         } else {
-            std::string line = args.files[i];
+            text += args.files[i];
             for (float v : d) {
-                line += ',';
-                append_float(line, v);
+                text += ',';
+                detail::append_float(text, v);
             }
-            line += '\n';
-            out << line;
+            text += '\n';
         }
     }
-    if (args.format == "json") out << json.dump(1) << '\n';
-    out.flush();
-    if (!out) throw std::runtime_error("writing the output failed");
+    if (args.format == "json") text += json.dump(1) + '\n';
+    if (args.output.empty()) {
+        std::cout << text;
+        std::cout.flush();
+        if (!std::cout) throw std::runtime_error("writing the output failed");
+    } else {
+        detail::write_file_atomically(args.output, text);
+    }
     if (failed) throw ExitStatus{kExitRuntime};
 }
 

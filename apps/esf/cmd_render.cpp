@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -16,6 +15,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -49,19 +49,6 @@ std::string view_name(std::size_t index, std::size_t count) {
     std::ostringstream name;
     name << "view_" << std::setw(digits) << std::setfill('0') << index << ".pcd";
     return name.str();
-}
-
-void write_text(const std::filesystem::path& path, const std::string& text) {
-    const std::filesystem::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary);
-        out << text;
-        out.flush();
-        if (!out) throw IoError(file_message(path.string(), 0, "cannot write"));
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) throw IoError(file_message(path.string(), 0, "cannot write: " + ec.message()));
 }
 
 void run_render(const RenderArgs& args) {
@@ -133,7 +120,7 @@ void run_render(const RenderArgs& args) {
             for (int c = 0; c < 4; ++c) csv << ',' << poses[i](r, c);
         csv << '\n';
     }
-    write_text(dir / "poses.csv", csv.str());
+    detail::write_file_atomically(dir / "poses.csv", csv.str());
 
     const CameraIntrinsics& k = options.camera;
     nlohmann::json summary = {
@@ -170,7 +157,7 @@ void run_render(const RenderArgs& args) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     nlohmann::json file_summary = summary;
     file_summary["view_list"] = view_list;
-    write_text(dir / "render.json", file_summary.dump(1) + "\n");
+    detail::write_file_atomically(dir / "render.json", file_summary.dump(1) + "\n");
 
     if (args.json) {
         std::cout << summary.dump(1) << '\n';

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -14,6 +13,7 @@
 #include "cli_common.hpp"
 #include "cli_scene.hpp"
 #include "commands.hpp"
+#include "core/atomic_file.hpp"
 #include "esf/core/error.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/io/depth_image.hpp"
@@ -110,12 +110,7 @@ void run_segment(const SegmentArgs& args) {
              {"message", c.message}});
     }
     const fs::path summary_path = dir / "summary.json";
-    {
-        std::ofstream file(summary_path);
-        file << summary.dump(2) << '\n';
-        file.close();
-        if (!file) throw IoError(file_message(summary_path.string(), 0, "write failed"));
-    }
+    detail::write_file_atomically(summary_path, summary.dump(2) + '\n');
 
     if (args.json) {
         std::cout << summary.dump(2) << '\n';

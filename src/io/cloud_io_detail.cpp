@@ -138,46 +138,6 @@ std::string read_all(std::istream& in, const std::string& name) {
     return data;
 }
 
-void write_file_replacing(const std::string& path, std::string_view bytes) {
-    // A fresh temporary beside the target (O_EXCL: concurrent writers never share one), then an
-    // atomic rename over the target.
-    std::string tmp;
-    int fd = -1;
-    int error = 0;
-    for (int attempt = 0; attempt < 1000 && fd < 0; ++attempt) {
-        tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(attempt);
-        fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        error = errno;
-        if (fd < 0 && error != EEXIST) break;
-    }
-    if (fd < 0) fail(path, 0, "cannot create temporary file " + tmp + ": " + errno_text(error));
-    const char* p = bytes.data();
-    std::size_t left = bytes.size();
-    while (left > 0) {
-        const ssize_t written = ::write(fd, p, left);
-        if (written < 0) {
-            if (errno == EINTR) continue;
-            error = errno;
-            ::close(fd);
-            ::unlink(tmp.c_str());
-            fail(path, 0, "write failed: " + errno_text(error));
-        }
-        p += written;
-        left -= static_cast<std::size_t>(written);
-    }
-    if (::close(fd) != 0) {
-        error = errno;
-        ::unlink(tmp.c_str());
-        fail(path, 0, "write failed: " + errno_text(error));
-    }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        ::unlink(tmp.c_str());
-        fail(path, 0, "cannot replace the file: " + ec.message());
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Lines, tokens, typed values
 

@@ -77,10 +77,6 @@ FileBytes read_regular_file(const std::string& path);
 /// Everything left in `in`: one read when the stream can tell its size, chunks otherwise.
 std::string read_all(std::istream& in, const std::string& name);
 
-/// Writes `bytes` to a fresh temporary beside `path` (O_EXCL) and renames it over `path`, so a
-/// failure leaves no partial file.
-void write_file_replacing(const std::string& path, std::string_view bytes);
-
 // ---------------------------------------------------------------------------------------------
 // Lines and tokens
 

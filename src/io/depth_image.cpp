@@ -12,6 +12,7 @@
 #include <ostream>
 #include <stdexcept>
 
+#include "core/atomic_file.hpp"
 #include "esf/core/error.hpp"
 #include "io/png_writer.hpp"
 
@@ -175,13 +176,8 @@ void write_depth_png(std::ostream& out, const DepthImage& image, const std::stri
 
 void write_depth_png(const std::string& path, const DepthImage& image) {
     check_image(image, "write_depth_png");
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out)
-        throw IoError(
-            file_message(path, 0, "cannot open for writing: " + std::string(std::strerror(errno))));
-    write_depth_png(out, image, path);
-    out.close();
-    if (!out) throw IoError(file_message(path, 0, "write failed"));
+    detail::write_file_atomically(path,
+                                  [&](std::ostream& out) { write_depth_png(out, image, path); });
 }
 
 PointCloud depth_to_cloud(const DepthImage& image, const CameraIntrinsics& k,

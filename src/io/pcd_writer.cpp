@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -139,7 +140,7 @@ void write_pcd(std::ostream& out, const PointCloud& cloud, PcdEncoding encoding)
 }
 
 void write_pcd(const std::string& path, const PointCloud& cloud, PcdEncoding encoding) {
-    write_file_replacing(path, encode_pcd(cloud, encoding));
+    write_file_atomically(path, encode_pcd(cloud, encoding));
 }
 
 }  // namespace esf

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -88,7 +89,7 @@ void write_xyz(std::ostream& out, const PointCloud& cloud) {
 }
 
 void write_xyz(const std::string& path, const PointCloud& cloud) {
-    write_file_replacing(path, encode_xyz(cloud));
+    write_file_atomically(path, encode_xyz(cloud));
 }
 
 }  // namespace esf

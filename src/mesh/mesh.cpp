@@ -3,21 +3,16 @@
 
 #include "esf/mesh/mesh.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "esf/core/error.hpp"
 
 namespace esf {
@@ -70,52 +65,27 @@ void write_ply_mesh(const std::string& path, const Mesh& mesh) {
     header += "element face " + std::to_string(mesh.triangles.size()) + "\n";
     header += "property list uchar int vertex_indices\nend_header\n";
 
-    std::vector<char> body;
-    body.reserve(mesh.vertices.size() * 12 + mesh.triangles.size() * 13);
-    const auto put = [&body](const void* data, std::size_t size) {
-        const char* bytes = static_cast<const char*>(data);
+    std::string bytes = std::move(header);
+    bytes.reserve(bytes.size() + mesh.vertices.size() * 12 + mesh.triangles.size() * 13);
+    const auto put = [&bytes](const void* data, std::size_t size) {
+        const char* from = static_cast<const char*>(data);
         if constexpr (std::endian::native == std::endian::little) {
-            body.insert(body.end(), bytes, bytes + size);
+            bytes.append(from, size);
         } else {
-            for (std::size_t i = size; i-- > 0;) body.push_back(bytes[i]);
+            for (std::size_t i = size; i-- > 0;) bytes.push_back(from[i]);
         }
     };
     for (const auto& v : mesh.vertices) {
         for (int k = 0; k < 3; ++k) put(&v[k], sizeof(float));
     }
     for (const auto& t : mesh.triangles) {
-        body.push_back(static_cast<char>(3));
+        bytes.push_back(static_cast<char>(3));
         for (int k = 0; k < 3; ++k) {
             const std::int32_t index = t[k];
             put(&index, sizeof(index));
         }
     }
-
-    std::string temp = path + ".XXXXXX";
-    const int fd = ::mkstemp(temp.data());
-    if (fd < 0)
-        throw IoError(file_message(path, 0, std::string("cannot create: ") + std::strerror(errno)));
-    bool ok = ::fchmod(fd, 0644) == 0;
-    const auto write_all = [fd](const char* data, std::size_t size) {
-        while (size > 0) {
-            const ssize_t n = ::write(fd, data, size);
-            if (n < 0) {
-                if (errno == EINTR) continue;
-                return false;
-            }
-            data += n;
-            size -= static_cast<std::size_t>(n);
-        }
-        return true;
-    };
-    ok = ok && write_all(header.data(), header.size()) && write_all(body.data(), body.size());
-    const int saved_errno = errno;
-    ok = (::close(fd) == 0) && ok;
-    if (!ok || std::rename(temp.c_str(), path.c_str()) != 0) {
-        const int error = ok ? errno : saved_errno;
-        ::unlink(temp.c_str());
-        throw IoError(file_message(path, 0, std::string("cannot write: ") + std::strerror(error)));
-    }
+    detail::write_file_atomically(path, bytes);
 }
 
 }  // namespace esf

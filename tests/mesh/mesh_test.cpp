@@ -524,7 +524,7 @@ TEST_F(MeshTest, WriteErrors) {
     const std::string bad_dir = (dir_ / "no" / "such" / "dir" / "m.ply").string();
     EXPECT_THROW(esf::write_ply_mesh(bad_dir, mesh), esf::IoError);
     EXPECT_EQ(error_of([&] { esf::write_ply_mesh(bad_dir, mesh); }),
-              bad_dir + ": cannot create: No such file or directory");
+              bad_dir + ": cannot create temporary file: No such file or directory");
 
     const std::string path = (dir_ / "m.ply").string();
     esf::Mesh bad_index = mesh;
