@@ -22,6 +22,11 @@ constexpr std::uint64_t mix64(std::uint64_t z) {
 /// One step of the generator: advances `state` by the increment and mixes it.
 constexpr std::uint64_t splitmix64(std::uint64_t& state) { return mix64(state += kGoldenGamma); }
 
+/// Uniform in [0, 1): the top 53 bits of the generator's next output.
+constexpr double splitmix64_uniform(std::uint64_t& state) {
+    return static_cast<double>(splitmix64(state) >> 11) * 0x1.0p-53;
+}
+
 /// The generator as an object.
 class SplitMix64 {
   public:
@@ -32,7 +37,7 @@ class SplitMix64 {
     /// Uniform in [0, n) up to a bias below 2^-32 (n < 2^32).
     constexpr std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
     /// Uniform in [0, 1): the top 53 bits of the next output.
-    constexpr double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+    constexpr double uniform() { return splitmix64_uniform(state_); }
 
   private:
     std::uint64_t state_;

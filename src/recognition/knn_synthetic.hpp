@@ -28,7 +28,7 @@ class SplitMix {
         : state_(seed * kGoldenGamma ^ (stream + 1) * 0xD1B54A32D192ED03ull) {}
     std::uint64_t next() { return splitmix64(state_); }
     /// Uniform in [0, 1).
-    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+    double uniform() { return splitmix64_uniform(state_); }
 
   private:
     std::uint64_t state_;

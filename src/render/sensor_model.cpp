@@ -7,16 +7,13 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/splitmix64.hpp"
+
 namespace esf {
 namespace {
 
-constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ULL;
-
-constexpr std::uint64_t mix(std::uint64_t x) {
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-    return x ^ (x >> 31);
-}
+using detail::kGoldenGamma;
+using detail::mix64;
 
 constexpr double kDegree = std::numbers::pi / 180.0;
 
@@ -51,12 +48,10 @@ double grazing_drop_probability(double theta) {
 }
 
 PixelRandom::PixelRandom(std::uint64_t seed, std::uint64_t view, std::uint64_t pixel)
-    : state_(mix(mix(mix(seed + kGolden) ^ (view + kGolden)) ^ (pixel + kGolden))) {}
+    : state_(mix64(mix64(mix64(seed + kGoldenGamma) ^ (view + kGoldenGamma)) ^
+                   (pixel + kGoldenGamma))) {}
 
-double PixelRandom::uniform() {
-    state_ += kGolden;
-    return static_cast<double>(mix(state_) >> 11) * 0x1.0p-53;
-}
+double PixelRandom::uniform() { return detail::splitmix64_uniform(state_); }
 
 double PixelRandom::normal() {
     // Inverse normal CDF of one uniform, Acklam's rational approximation (relative error

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/fnv1a.hpp"
 #include "core/splitmix64.hpp"
 
 namespace esf::shapes {
@@ -37,7 +38,7 @@ void orient_outwards(Surface& surface) {
 
 std::uint64_t Rng::next() { return detail::splitmix64(state_); }
 
-double Rng::uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+double Rng::uniform() { return detail::splitmix64_uniform(state_); }
 
 double Rng::uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
 
@@ -49,11 +50,7 @@ int Rng::integer(int lo, int hi) {
 bool Rng::chance(double probability) { return uniform() < probability; }
 
 std::uint64_t model_seed(std::uint64_t seed, std::string_view category, int index) {
-    std::uint64_t name_hash = 0xCBF29CE484222325ULL;  // FNV-1a
-    for (const char c : category) {
-        name_hash ^= static_cast<unsigned char>(c);
-        name_hash *= 0x100000001B3ULL;
-    }
+    const std::uint64_t name_hash = detail::fnv1a(category);
     std::uint64_t x = splitmix64(seed);
     x = splitmix64(x ^ name_hash);
     return splitmix64(x ^ static_cast<std::uint64_t>(static_cast<std::uint32_t>(index)));

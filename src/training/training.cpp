@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "core/csv.hpp"
+#include "core/fnv1a.hpp"
 #include "core/splitmix64.hpp"
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
@@ -38,16 +39,6 @@ bool hidden(const fs::path& p) {
 }
 
 using detail::mix64;
-
-/// FNV-1a, a fixed string hash (std::hash may differ between library versions).
-std::uint64_t fnv1a(std::string_view s) {
-    std::uint64_t h = 0xCBF29CE484222325ull;
-    for (const char c : s) {
-        h ^= static_cast<unsigned char>(c);
-        h *= 0x100000001B3ull;
-    }
-    return h;
-}
 
 /// Longest sides (metres) of typical household objects, for categories whose catalog has no
 /// metric model to learn a size from.
@@ -385,7 +376,7 @@ double typical_extent(const Catalog& catalog, const std::string& category) {
 }
 
 std::uint64_t model_seed(std::uint64_t seed, const std::string& category, const std::string& name) {
-    return mix64(seed ^ mix64(fnv1a(category + "/" + name)));
+    return mix64(seed ^ mix64(detail::fnv1a(category + "/" + name)));
 }
 
 std::uint64_t view_seed(std::uint64_t model_seed_value, int view_index) {
@@ -404,11 +395,7 @@ std::string catalog_path(const std::string& root, const std::string& catalog, bo
 }
 
 // FNV-1a of a name, mixed: the order groups are dealt into folds.
-std::uint64_t group_hash(const std::string& name) {
-    std::uint64_t h = 0xcbf29ce484222325ull;
-    for (const unsigned char c : name) h = (h ^ c) * 0x100000001b3ull;
-    return detail::mix64(h);
-}
+std::uint64_t group_hash(const std::string& name) { return detail::mix64(detail::fnv1a(name)); }
 
 }  // namespace
 
