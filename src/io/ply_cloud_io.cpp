@@ -13,132 +13,13 @@
 #include "core/number_text.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "io/cloud_io_detail.hpp"
+#include "io/ply_header.hpp"
 
 namespace esf {
 
 namespace {
 
 using namespace detail;
-
-enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
-
-struct PlyProperty {
-    std::string name;
-    Scalar type = Scalar::kF32;
-    bool is_list = false;
-    Scalar count_type = Scalar::kU8;
-};
-
-struct PlyElement {
-    std::string name;
-    std::uint64_t count = 0;
-    std::vector<PlyProperty> properties;
-    std::size_t line = 0;
-
-    bool has_list() const {
-        return std::any_of(properties.begin(), properties.end(),
-                           [](const PlyProperty& p) { return p.is_list; });
-    }
-    /// Bytes per item in binary; only meaningful without list properties.
-    std::uint64_t stride() const {
-        std::uint64_t s = 0;
-        for (const auto& p : properties) s += scalar_size(p.type);
-        return s;
-    }
-};
-
-struct PlyHeader {
-    PlyFormat format = PlyFormat::kAscii;
-    std::vector<PlyElement> elements;
-    std::size_t data_pos = 0;
-    std::size_t data_line = 0;  // line number of end_header
-};
-
-std::optional<Scalar> ply_scalar(std::string_view t) {
-    if (t == "char" || t == "int8") return Scalar::kI8;
-    if (t == "uchar" || t == "uint8") return Scalar::kU8;
-    if (t == "short" || t == "int16") return Scalar::kI16;
-    if (t == "ushort" || t == "uint16") return Scalar::kU16;
-    if (t == "int" || t == "int32") return Scalar::kI32;
-    if (t == "uint" || t == "uint32") return Scalar::kU32;
-    if (t == "float" || t == "float32") return Scalar::kF32;
-    if (t == "double" || t == "float64") return Scalar::kF64;
-    return std::nullopt;
-}
-
-PlyHeader parse_ply_header(std::string_view data, const std::string& name) {
-    PlyHeader h;
-    LineCursor cursor(data, 0, 0);
-    std::vector<std::string_view> tok;
-    std::string_view line;
-    if (!cursor.next(line)) fail(name, 1, "not a PLY file (no 'ply' line)");
-    split(line, kSpace, tok);
-    if (tok.size() != 1 || tok[0] != "ply") fail(name, 1, "not a PLY file (no 'ply' line)");
-    bool have_format = false;
-    while (cursor.next(line)) {
-        const std::size_t ln = cursor.line();
-        split(line, kSpace, tok);
-        if (tok.empty()) continue;
-        const std::string key(tok[0]);
-        auto bad = [&](const std::string& why) {
-            fail(name, ln, "bad header: " + key + ": " + why);
-        };
-        if (key == "comment" || key == "obj_info") continue;
-        if (key == "format") {
-            if (tok.size() != 3) bad("expected 'format <type> 1.0'");
-            if (tok[1] == "ascii") {
-                h.format = PlyFormat::kAscii;
-            } else if (tok[1] == "binary_little_endian") {
-                h.format = PlyFormat::kBinaryLittle;
-            } else if (tok[1] == "binary_big_endian") {
-                h.format = PlyFormat::kBinaryBig;
-            } else {
-                bad("unknown format " + shown(tok[1]));
-            }
-            have_format = true;
-            continue;
-        }
-        if (key == "element") {
-            std::uint64_t count = 0;
-            if (tok.size() != 3) bad("expected 'element <name> <count>'");
-            if (!parse_integer(tok[2], count))
-                bad("count is not a non-negative integer: " + shown(tok[2]));
-            h.elements.push_back(PlyElement{
-                .name = std::string(tok[1]), .count = count, .properties = {}, .line = ln});
-            continue;
-        }
-        if (key == "property") {
-            if (h.elements.empty()) bad("comes before any element");
-            PlyProperty p;
-            if (tok.size() >= 2 && tok[1] == "list") {
-                if (tok.size() != 5)
-                    bad("expected 'property list <count type> <item type> <name>'");
-                const auto count_type = ply_scalar(tok[2]);
-                const auto type = ply_scalar(tok[3]);
-                if (!count_type || *count_type == Scalar::kF32 || *count_type == Scalar::kF64) {
-                    bad("list count type must be an integer type, got " + shown(tok[2]));
-                }
-                if (!type) bad("unknown type " + shown(tok[3]));
-                p = PlyProperty{std::string(tok[4]), *type, true, *count_type};
-            } else {
-                if (tok.size() != 3) bad("expected 'property <type> <name>'");
-                const auto type = ply_scalar(tok[1]);
-                if (!type) bad("unknown type " + shown(tok[1]));
-                p = PlyProperty{.name = std::string(tok[2]), .type = *type};
-            }
-            h.elements.back().properties.push_back(p);
-            continue;
-        }
-        if (key == "end_header") {
-            if (!have_format) bad("no format line before end_header");
-            h.data_pos = cursor.pos();
-            h.data_line = ln;
-            return h;
-        }
-        fail(name, ln, "bad header: unknown keyword " + shown(key));
-    }
-    fail(name, cursor.line(), "bad header: no end_header line");
-}
 
 /// What each vertex property is to us: 0 x, 1 y, 2 z, 3 label, -1 skipped.
 std::vector<int> vertex_roles(const PlyElement& vertex, const std::string& name) {

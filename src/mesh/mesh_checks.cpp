@@ -13,9 +13,11 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "esf/core/error.hpp"
+#include "io/ply_header.hpp"
 
 namespace esf::detail {
 namespace {
@@ -107,18 +109,23 @@ void check_ply_lists(std::istream& in, const std::string& path,
 }
 
 // Assimp 5.2 loops forever on a PLY header without `end_header` and allocates whatever the
-// header announces; check the header against the file size first.
+// header announces; check the header (io/ply_header.hpp) against the file size first.
 void check_ply_header(const std::string& path, std::uintmax_t file_size) {
-    std::ifstream in(path, std::ios::binary);
-    std::string line;
-    if (!std::getline(in, line)) return;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line != "ply" && line != "PLY") return;  // not PLY: Assimp reports it
-
     constexpr std::size_t kMaxHeader = std::size_t{1} << 20;
-    std::size_t header_bytes = line.size() + 1;
-    bool binary = false;
-    bool big_endian = false;
+    std::ifstream in(path, std::ios::binary);
+    std::string start(static_cast<std::size_t>(std::min<std::uintmax_t>(file_size, kMaxHeader)),
+                      '\0');
+    in.read(start.data(), static_cast<std::streamsize>(start.size()));
+    start.resize(static_cast<std::size_t>(in.gcount()));
+    const PlyHeader header = read_ply_header(start);
+    if (!header.is_ply) return;  // not PLY: Assimp reports it
+    const bool ended = header.ended;
+    const bool binary = header.format != PlyFormat::kAscii;
+    const bool big_endian = header.format == PlyFormat::kBinaryBig;
+    // A header cut before its last newline counts that newline too (nothing follows it).
+    const bool last_line_open =
+        header.data_pos == start.size() && (start.empty() || start.back() != '\n');
+    const std::size_t header_bytes = header.data_pos + (last_line_open ? 1 : 0);
     bool known_sizes = true;
     struct Property {
         int size = 0;        // bytes of a value (of an item, for a list)
@@ -132,55 +139,21 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
         std::vector<Property> layout;
     };
     std::vector<Element> elements;
-    const auto type_size = [](const std::string& type) -> int {
-        if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-        if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-        if (type == "int" || type == "uint" || type == "int32" || type == "uint32" ||
-            type == "float" || type == "float32")
-            return 4;
-        if (type == "double" || type == "float64") return 8;
-        return 0;
-    };
-    bool ended = false;
-    while (header_bytes < kMaxHeader && std::getline(in, line)) {
-        header_bytes += line.size() + 1;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        std::istringstream words(line);
-        std::string keyword;
-        words >> keyword;
-        if (keyword == "end_header") {
-            ended = true;
-            break;
-        }
-        if (keyword == "format") {
-            std::string format;
-            words >> format;
-            binary = format.rfind("binary", 0) == 0;
-            big_endian = format == "binary_big_endian";
-        } else if (keyword == "element") {
-            Element e;
-            words >> e.name >> e.count;
-            if (!words || !(e.count >= 0)) known_sizes = false;
-            elements.push_back(e);
-        } else if (keyword == "property" && !elements.empty()) {
-            std::string type;
-            words >> type;
+    for (const PlyElement& ply : header.elements) {
+        Element e;
+        e.name = ply.name;
+        e.count = ply.written_count;
+        if (!(e.count >= 0)) known_sizes = false;
+        for (const PlyProperty& p : ply.properties) {
+            if (!p.known_type) known_sizes = false;
             Property property;
-            if (type == "list") {  // the count type; items may be none
-                std::string item;
-                words >> type >> item;
-                property.count_size = type_size(type);
-                property.size = type_size(item);
-                if (property.size == 0) known_sizes = false;
-            } else {
-                property.size = type_size(type);
-            }
-            const int size = property.count_size ? property.count_size : property.size;
-            if (size == 0) known_sizes = false;
-            elements.back().min_bytes += size;
-            ++elements.back().properties;
-            elements.back().layout.push_back(property);
+            property.size = static_cast<int>(scalar_size(p.type));
+            if (p.is_list) property.count_size = static_cast<int>(scalar_size(p.count_type));
+            e.min_bytes += property.count_size ? property.count_size : property.size;
+            ++e.properties;
+            e.layout.push_back(property);
         }
+        elements.push_back(std::move(e));
     }
     if (!ended) throw IoError(file_message(path, 0, "PLY header has no end_header line"));
     if (!known_sizes) return;
@@ -200,6 +173,8 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
         }
     }
     // A header cut before its last newline leaves `available` at -1: nothing follows it.
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(std::min<std::uintmax_t>(header_bytes, file_size)));
     check_ply_lists(in, path, elements, binary, big_endian,
                     static_cast<std::uint64_t>(std::max(0.0, available)));
 }
