@@ -87,4 +87,21 @@ TEST(NumberText, ShortestOutputReadsBackBitForBit) {
     EXPECT_EQ(out, "0.1");
 }
 
+TEST(NumberText, FixedPercentAndSignificantDigits) {
+    using esf::detail::fixed_text;
+    using esf::detail::percent_text;
+    using esf::detail::significant_text;
+    EXPECT_EQ(fixed_text(2.345, 1), "2.3");
+    EXPECT_EQ(fixed_text(12.0, 2), "12.00");
+    EXPECT_EQ(fixed_text(-0.5, 0), "-0");
+    EXPECT_EQ(fixed_text(1e300, 1).size(), 303u);  // longer than any fixed buffer
+    EXPECT_EQ(percent_text(0.1234), "12.3");
+    EXPECT_EQ(percent_text(1.0), "100.0");
+    EXPECT_EQ(percent_text(0.834, 0), "83");
+    EXPECT_EQ(significant_text(0.000123456, 3), "0.000123");
+    EXPECT_EQ(significant_text(1e18, 6), "1e+18");
+    EXPECT_EQ(significant_text(0.1, 17), "0.10000000000000001");
+    EXPECT_EQ(significant_text(30.0, 6), "30");
+}
+
 }  // namespace
