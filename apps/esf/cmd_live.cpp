@@ -18,6 +18,7 @@
 #include "cli_recognize.hpp"
 #include "cli_scene.hpp"
 #include "commands.hpp"
+#include "core/elapsed_time.hpp"
 #include "esf/io/kinect_raw.hpp"
 #include "esf/recognition/object_tracks.hpp"
 #include "esf/recognition/recognizer.hpp"
@@ -186,9 +187,7 @@ void run_live(LiveArgs& args) {
     const bool status_line = stderr_is_terminal();
 
     const auto start = Clock::now();
-    auto seconds_since = [](Clock::time_point t) {
-        return std::chrono::duration<double>(Clock::now() - t).count();
-    };
+    using detail::seconds_since;
     Clock::time_point last_arrival = start;
     double last_status = -1.0, last_page = -1.0;
     std::optional<double> first_time;

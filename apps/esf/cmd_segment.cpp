@@ -14,6 +14,7 @@
 #include "cli_scene.hpp"
 #include "commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/elapsed_time.hpp"
 #include "esf/core/error.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/io/depth_image.hpp"
@@ -48,8 +49,7 @@ void run_segment(const SegmentArgs& args) {
 
     const auto start = std::chrono::steady_clock::now();
     const SegmentationResult result = segment_scene(cloud, options);
-    const double ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double ms = detail::milliseconds_since(start);
 
     // Output folder: created when missing; clusters of an earlier run are removed first so that
     // the folder always matches summary.json.

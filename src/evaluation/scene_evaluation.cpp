@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "core/csv.hpp"
+#include "core/elapsed_time.hpp"
 #include "esf/core/error.hpp"
 #include "esf/evaluation/pose_accuracy.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -24,10 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-double ms_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-        .count();
-}
+using detail::milliseconds_since;
 
 double ratio(std::size_t a, std::size_t b) {
     return b ? static_cast<double>(a) / static_cast<double>(b) : 0.0;
@@ -234,12 +232,12 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                 throw std::invalid_argument("the cloud has no per-point label field");
             auto start = std::chrono::steady_clock::now();
             SegmentationResult segmentation = segment_scene(cloud, options.segmentation);
-            const double segmented = ms_since(start);
+            const double segmented = milliseconds_since(start);
             start = std::chrono::steady_clock::now();
             const SceneRecognition recognition =
                 recognizer.recognize(std::move(segmentation), cloud);
             segment_ms += segmented;
-            recognize_ms += ms_since(start);
+            recognize_ms += milliseconds_since(start);
             ++frames;
 
             std::vector<Cluster> clusters;

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/elapsed_time.hpp"
 #include "descriptors/esf/esf_points.hpp"
 #include "descriptors/esf/esf_trace.hpp"
 #include "descriptors/esf/esf_triangles.hpp"
@@ -328,8 +329,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
                         std::span(ws.occupied).first(lines), std::span(ws.visited).first(lines),
                         ws.trace, kernel, detail::LineEnds::kSetBeforeDilation);
     if (trial) {
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - trace_start).count();
+        const double seconds = detail::seconds_since(trace_start);
         std::size_t cells = 0;
         for (std::size_t i = 0; i < lines; ++i) cells += ws.visited[i];
         ws.trials.record(kernel, seconds, cells);
