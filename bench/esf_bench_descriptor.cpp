@@ -42,14 +42,15 @@ int main(int argc, char** argv) {
             repeats = std::atoi(argv[++i]);
         } else if (arg == "--kernels" && i + 1 < argc) {
             try {
-                fast_options.kernels = esf::parse_esf_kernels(argv[++i]);
+                fast_options.kernels = esf::parse_enum<esf::Kernels>(argv[++i]);
             } catch (const std::exception& e) {
                 std::fprintf(stderr, "esf_bench_descriptor: %s\n", e.what());
                 return 1;
             }
         } else if (arg == "-h" || arg == "--help") {
             std::printf(
-                "usage: esf_bench_descriptor [--repeats N] [--kernels best|avx2|portable] FILE...\n"
+                "usage: esf_bench_descriptor [--repeats N] [--kernels best|avx512|avx2|portable] "
+                "FILE...\n"
                 "Times pcl::ESFEstimation and esf (fast and pcl samplers) on each cloud,\n"
                 "single thread, best of N runs; ends with 'ratio: PCL time / esf time'.\n"
                 "--kernels avx2 runs the fast sampler as a CPU without AVX-512 would.\n");

@@ -101,7 +101,7 @@ int main(int argc, char** argv) {
     std::printf(
         "esf KnnIndex: built in %.2f s (%d threads), kernel %s, %.0f bytes per view "
         "(%zu float row + %zu sketch + 8 error), %.1f MB in all\n",
-        build, cores, esf::to_string(index.kernel()), per_view, dim * sizeof(float),
+        build, cores, esf::to_string(index.kernels()), per_view, dim * sizeof(float),
         index.sketch_bytes(), static_cast<double>(index.memory_bytes()) / 1e6);
 
     // One query at a time on this thread, FLANN and esf in turns, so that both meet the same

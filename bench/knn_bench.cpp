@@ -17,8 +17,8 @@
 
 namespace {
 
+using esf::Kernels;
 using esf::KnnIndex;
-using esf::KnnKernel;
 
 constexpr std::size_t kDim = esf::kEsfSize;
 constexpr std::size_t kQueries = 64;
@@ -36,26 +36,26 @@ const std::vector<float>& queries() {
     return rows;
 }
 
-const KnnIndex& index(std::size_t views, KnnKernel kernel) {
-    static std::map<std::pair<std::size_t, KnnKernel>, std::unique_ptr<KnnIndex>> cache;
+const KnnIndex& index(std::size_t views, Kernels kernel) {
+    static std::map<std::pair<std::size_t, Kernels>, std::unique_ptr<KnnIndex>> cache;
     auto& slot = cache[{views, kernel}];
     if (!slot) {
         esf::KnnIndexOptions options;
-        options.kernel = kernel;
+        options.kernels = kernel;
         slot = std::make_unique<KnnIndex>(database(views), kDim, options);
     }
     return *slot;
 }
 
-KnnKernel kernel_arg(const benchmark::State& state, int i) {
-    return static_cast<KnnKernel>(state.range(i));
+Kernels kernel_arg(const benchmark::State& state, int i) {
+    return static_cast<Kernels>(state.range(i));
 }
 
 void BM_Search(benchmark::State& state) {
     const auto views = static_cast<std::size_t>(state.range(0));
     const auto k = static_cast<std::size_t>(state.range(1));
-    const KnnKernel kernel = kernel_arg(state, 2);
-    if (!esf::knn_kernel_supported(kernel)) {
+    const Kernels kernel = kernel_arg(state, 2);
+    if (!esf::kernels_supported(kernel)) {
         state.SkipWithError("kernel not supported by this CPU");
         return;
     }
@@ -77,17 +77,17 @@ BENCHMARK(BM_Search)
     ->ArgNames({"views", "k", "kernel"})
     ->ArgsProduct({{10000, 100000},
                    {10},
-                   {static_cast<int>(KnnKernel::kScalar), static_cast<int>(KnnKernel::kAvx2),
-                    static_cast<int>(KnnKernel::kAvx512)}})
-    ->Args({100000, 1, static_cast<int>(KnnKernel::kAuto)})
-    ->Args({100000, 50, static_cast<int>(KnnKernel::kAuto)})
-    ->Args({300000, 10, static_cast<int>(KnnKernel::kAuto)})
+                   {static_cast<int>(Kernels::kPortable), static_cast<int>(Kernels::kAvx2),
+                    static_cast<int>(Kernels::kAvx512)}})
+    ->Args({100000, 1, static_cast<int>(Kernels::kBest)})
+    ->Args({100000, 50, static_cast<int>(Kernels::kBest)})
+    ->Args({300000, 10, static_cast<int>(Kernels::kBest)})
     ->Unit(benchmark::kMicrosecond);
 
 void BM_SearchBatch(benchmark::State& state) {
     const auto views = static_cast<std::size_t>(state.range(0));
     const int threads = static_cast<int>(state.range(1));
-    const KnnIndex& idx = index(views, KnnKernel::kAuto);
+    const KnnIndex& idx = index(views, Kernels::kBest);
     for (auto _ : state) {
         const auto r = idx.search_batch(queries(), 10, threads);
         benchmark::DoNotOptimize(r.data());
@@ -112,8 +112,8 @@ void BM_Build(benchmark::State& state) {
 BENCHMARK(BM_Build)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ExactDistance(benchmark::State& state) {
-    const KnnKernel kernel = kernel_arg(state, 0);
-    if (!esf::knn_kernel_supported(kernel)) {
+    const Kernels kernel = kernel_arg(state, 0);
+    if (!esf::kernels_supported(kernel)) {
         state.SkipWithError("kernel not supported by this CPU");
         return;
     }
@@ -133,11 +133,11 @@ void BM_ExactDistance(benchmark::State& state) {
 }
 BENCHMARK(BM_ExactDistance)
     ->ArgName("kernel")
-    ->DenseRange(static_cast<int>(KnnKernel::kScalar), static_cast<int>(KnnKernel::kAvx512));
+    ->DenseRange(static_cast<int>(Kernels::kAvx512), static_cast<int>(Kernels::kPortable));
 
 void BM_SketchBounds(benchmark::State& state) {
-    const KnnKernel kernel = kernel_arg(state, 0);
-    if (!esf::knn_kernel_supported(kernel)) {
+    const Kernels kernel = kernel_arg(state, 0);
+    if (!esf::kernels_supported(kernel)) {
         state.SkipWithError("kernel not supported by this CPU");
         return;
     }
@@ -160,7 +160,7 @@ void BM_SketchBounds(benchmark::State& state) {
 }
 BENCHMARK(BM_SketchBounds)
     ->ArgName("kernel")
-    ->DenseRange(static_cast<int>(KnnKernel::kScalar), static_cast<int>(KnnKernel::kAvx512));
+    ->DenseRange(static_cast<int>(Kernels::kAvx512), static_cast<int>(Kernels::kPortable));
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 
 #include "esf/core/camera.hpp"
 #include "esf/core/error.hpp"
+#include "esf/core/kernels.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/core/point_cloud.hpp"
 #include "esf/demo/demo.hpp"

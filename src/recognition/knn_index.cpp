@@ -151,9 +151,9 @@ void KnnIndex::build(std::span<const float> rows, std::size_t dimension,
             }
         }
     }
-    if (!knn_kernel_supported(options.kernel))
-        throw std::invalid_argument(std::string("knn index: kernel ") + to_string(options.kernel) +
-                                    " is not supported by this CPU");
+    if (!kernels_supported(options.kernels))
+        throw std::invalid_argument(std::string("knn index: kernels ") +
+                                    to_string(options.kernels) + " are not supported by this CPU");
     if (options.sketch_group < 0)
         throw std::invalid_argument("knn index: sketch_group must be >= 0, got " +
                                     std::to_string(options.sketch_group));
@@ -225,7 +225,7 @@ void KnnIndex::build(std::span<const float> rows, std::size_t dimension,
     views_ = views;
     families_ = families;
     view_families_ = options.view_families;
-    kernel_ = options.kernel == KnnKernel::kAuto ? knn_best_kernel() : options.kernel;
+    kernels_ = options.kernels == Kernels::kBest ? best_kernels() : options.kernels;
     data_.assign(rows.begin(), rows.end());
     if (grouped) row_views_.assign(row_views.begin(), row_views.end());
     weights_ = options.weights.empty() ? std::vector<float>(dimension, 1.0f) : options.weights;
@@ -332,7 +332,7 @@ KnnResult KnnIndex::search(std::span<const float> query, std::size_t k) const {
 }
 
 void KnnIndex::lower_bounds(std::span<const float> queries, double* bounds) const {
-    const detail::KnnKernels kernels = detail::knn_kernels(kernel_);
+    const detail::KnnKernels distances = detail::knn_kernels(kernels_);
     const std::size_t count = queries.size() / dimension_;
     std::vector<double> values(stride_);
     std::vector<std::uint8_t> codes(count * stride_);
@@ -348,9 +348,9 @@ void KnnIndex::lower_bounds(std::span<const float> queries, double* bounds) cons
     for (std::size_t r = 0; r < rows_; r += block) {
         const std::size_t n = std::min(block, rows_ - r);
         for (std::size_t q = 0; q < count; ++q)
-            kernels.sketch(sketch_.data() + r * stride_, n, stride_, codes.data() + q * stride_,
-                           lane_weight_.data(), sketch_unit_, row_error_.data() + r, query_error[q],
-                           bounds + q * rows_ + r);
+            distances.sketch(sketch_.data() + r * stride_, n, stride_, codes.data() + q * stride_,
+                             lane_weight_.data(), sketch_unit_, row_error_.data() + r,
+                             query_error[q], bounds + q * rows_ + r);
     }
 }
 
@@ -362,7 +362,7 @@ KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) 
 
 KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
                                    double* bound) const {
-    const detail::KnnKernels kernels = detail::knn_kernels(kernel_);
+    const detail::KnnKernels distances = detail::knn_kernels(kernels_);
 
     // Optimal multi-step search (Seidl & Kriegel): lower bounds of all rows (see the header);
     // exact distances for the rows with the smallest bounds, which sets the k-th distance;
@@ -379,8 +379,8 @@ KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
             if (row_bound > top.threshold()) break;
             const std::uint32_t view = view_of(row);
             top.offer(family_of(view), view, row,
-                      kernels.exact(query.data(), data_.data() + row * dimension_, weights_.data(),
-                                    dimension_, top.threshold()));
+                      distances.exact(query.data(), data_.data() + row * dimension_,
+                                      weights_.data(), dimension_, top.threshold()));
             ++result.exact_distances;
         }
     };
@@ -487,8 +487,8 @@ double KnnIndex::distance(std::span<const float> query, std::size_t row) const {
     if (row >= rows_)
         throw std::invalid_argument("knn index: row " + std::to_string(row) + " out of range (" +
                                     std::to_string(rows_) + " rows)");
-    return detail::knn_kernels(kernel_).exact(query.data(), data_.data() + row * dimension_,
-                                              weights_.data(), dimension_, kInf);
+    return detail::knn_kernels(kernels_).exact(query.data(), data_.data() + row * dimension_,
+                                               weights_.data(), dimension_, kInf);
 }
 
 std::size_t KnnIndex::memory_bytes() const {

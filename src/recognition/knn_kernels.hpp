@@ -1,11 +1,13 @@
 #pragma once
-// Distance kernels of the k-NN index (internal): portable C++ and, chosen at run time, AVX2 and
-// AVX-512BW versions. Compiled with -ffp-contract=off so that no multiply-add is fused.
+// Distance kernels of the k-NN index (internal): portable C++ (knn_kernels.cpp) and, chosen at
+// run time, AVX2 (knn_kernels_avx2.cpp) and AVX-512 (knn_kernels_avx512.cpp) versions. Every
+// file is compiled with -ffp-contract=off so that no multiply-add is fused.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
-#include "esf/recognition/knn_index.hpp"
+#include "esf/core/kernels.hpp"
 
 namespace esf::detail {
 
@@ -39,7 +41,32 @@ struct KnnKernels {
     SketchFn sketch;
 };
 
-/// The kernels of `kernel` (kAuto resolves to knn_best_kernel()); the kernel must be supported.
-KnnKernels knn_kernels(KnnKernel kernel);
+/// The kernels of `kernels` (kBest resolves to best_kernels()); the CPU must support them
+/// (kernels_supported()).
+KnnKernels knn_kernels(Kernels kernels);
+
+// The kernels of each instruction set.
+double exact_avx2(const float* a, const float* b, const float* w, std::size_t n, double limit);
+void sketch_avx2(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                 const std::uint8_t* query, const std::uint32_t* weight, double unit,
+                 const double* row_error, double query_error, double* bound);
+double exact_avx512(const float* a, const float* b, const float* w, std::size_t n, double limit);
+void sketch_avx512(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                   const std::uint8_t* query, const std::uint32_t* weight, double unit,
+                   const double* row_error, double query_error, double* bound);
+
+/// The fixed pairwise combination of the eight lanes shared by every exact kernel.
+inline double combine_lanes(const double* lane) {
+    return ((lane[0] + lane[4]) + (lane[2] + lane[6])) +
+           ((lane[1] + lane[5]) + (lane[3] + lane[7]));
+}
+
+/// Adds the elements [begin, n) to their lanes (begin is a multiple of 8).
+inline void exact_tail(const float* a, const float* b, const float* w, std::size_t begin,
+                       std::size_t n, double* lane) {
+    for (std::size_t i = begin; i < n; ++i)
+        lane[i & 7] += static_cast<double>(w[i]) *
+                       std::fabs(static_cast<double>(a[i]) - static_cast<double>(b[i]));
+}
 
 }  // namespace esf::detail

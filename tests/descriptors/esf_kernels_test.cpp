@@ -25,11 +25,12 @@ using esf::test::esf_error_of;
 using esf::test::partial_cylinder;
 using ::testing::HasSubstr;
 
-/// Descriptors and attempts of kAvx2 and kPortable against kBest's.
+/// Descriptors and attempts of kAvx512, kAvx2 and kPortable against kBest's.
 void expect_kernels_agree(const esf::Points& points, const esf::EsfOptions& best,
                           const std::string& what) {
     const auto a = esf::compute_esf(points, best);
-    for (const esf::EsfKernels kernels : {esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
+    for (const esf::Kernels kernels :
+         {esf::Kernels::kAvx512, esf::Kernels::kAvx2, esf::Kernels::kPortable}) {
         esf::EsfOptions other = best;
         other.kernels = kernels;
         const auto b = esf::compute_esf(points, other);
@@ -153,8 +154,8 @@ TEST(EsfDescriptor, KernelsAgreeOnThinRodsAndAlmostStraightLines) {
     esf::EsfOptions options;
     options.samples = 2000;
     expect_kernels_agree(rod, options, "thin rod");
-    for (const esf::EsfKernels kernels :
-         {esf::EsfKernels::kBest, esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
+    for (const esf::Kernels kernels : {esf::Kernels::kBest, esf::Kernels::kAvx512,
+                                       esf::Kernels::kAvx2, esf::Kernels::kPortable}) {
         options.kernels = kernels;
         EXPECT_THAT(esf_error_of(line, options), HasSubstr("lie on one line"))
             << to_string(kernels);
@@ -170,8 +171,8 @@ TEST(EsfDescriptor, KernelsAgreeWhenTheAttemptsRunOut) {
     options.samples = 1000;
     options.max_attempts_per_sample = 1;
     std::string first;
-    for (const esf::EsfKernels kernels :
-         {esf::EsfKernels::kBest, esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable}) {
+    for (const esf::Kernels kernels : {esf::Kernels::kBest, esf::Kernels::kAvx512,
+                                       esf::Kernels::kAvx2, esf::Kernels::kPortable}) {
         options.kernels = kernels;
         const std::string error = esf_error_of(points, options);
         EXPECT_THAT(error, HasSubstr("non-degenerate triangles in 1000 random triples"));
@@ -181,14 +182,14 @@ TEST(EsfDescriptor, KernelsAgreeWhenTheAttemptsRunOut) {
 }
 
 TEST(EsfDescriptor, KernelNamesRoundTrip) {
-    for (const esf::EsfKernels kernels :
-         {esf::EsfKernels::kBest, esf::EsfKernels::kAvx2, esf::EsfKernels::kPortable})
-        EXPECT_EQ(esf::parse_esf_kernels(esf::to_string(kernels)), kernels);
+    for (const esf::Kernels kernels :
+         {esf::Kernels::kBest, esf::Kernels::kAvx512, esf::Kernels::kAvx2, esf::Kernels::kPortable})
+        EXPECT_EQ(esf::parse_enum<esf::Kernels>(esf::to_string(kernels)), kernels);
     try {
-        esf::parse_esf_kernels("sse");
+        esf::parse_enum<esf::Kernels>("sse");
         FAIL() << "no exception";
     } catch (const std::invalid_argument& e) {
-        EXPECT_STREQ(e.what(), "unknown ESF kernels 'sse' (expected best, avx2 or portable)");
+        EXPECT_STREQ(e.what(), "unknown kernels 'sse' (expected best, avx512, avx2 or portable)");
     }
 }
 

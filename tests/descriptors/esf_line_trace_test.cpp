@@ -20,9 +20,8 @@ namespace {
 using esf::detail::pack_cell;
 
 /// The SIMD line tracers (kAvx512: the build without VPOPCNTD).
-constexpr esf::detail::TraceKernel kSimdKernels[] = {esf::detail::TraceKernel::kBest,
-                                                     esf::detail::TraceKernel::kAvx512,
-                                                     esf::detail::TraceKernel::kAvx2};
+constexpr esf::Kernels kSimdKernels[] = {esf::Kernels::kBest, esf::Kernels::kAvx512,
+                                         esf::Kernels::kAvx2};
 
 // One cell set: the 3x3x3 block around it is occupied, clipped at the border.
 TEST(VoxelGrid, DilationMarksTheTwentySixNeighbours) {
@@ -54,8 +53,8 @@ TEST(LineTrace, FollowsHandComputedBresenhamCells) {
     const std::uint32_t end[] = {pack_cell(5, 2, 0), pack_cell(5, 2, 0), pack_cell(7, 7, 7)};
     std::uint32_t occupied[3];
     std::uint8_t visited[3];
-    for (auto kernel : {esf::detail::TraceKernel::kBest, esf::detail::TraceKernel::kAvx512,
-                        esf::detail::TraceKernel::kAvx2, esf::detail::TraceKernel::kScalar}) {
+    for (auto kernel : {esf::Kernels::kBest, esf::Kernels::kAvx512, esf::Kernels::kAvx2,
+                        esf::Kernels::kPortable}) {
         esf::detail::TraceScratch scratch;
         esf::detail::trace_lines(grid, start, end, occupied, visited, scratch, kernel);
         EXPECT_EQ(occupied[0], 5);
@@ -143,7 +142,7 @@ RandomLines lines_between(const std::vector<std::uint32_t>& points, std::size_t 
 
 /// The kernel's counts for `lines` equal the scalar reference's.
 void expect_kernel_matches_scalar(const esf::detail::VoxelGrid& grid, const RandomLines& lines,
-                                  esf::detail::TraceKernel kernel, esf::detail::LineEnds ends_hint,
+                                  esf::Kernels kernel, esf::detail::LineEnds ends_hint,
                                   esf::detail::TraceScratch& scratch, const std::string& context) {
     const std::size_t n = lines.starts.size();
     std::vector<std::uint32_t> expected(n), actual(n);
@@ -288,8 +287,8 @@ TEST(LineTrace, SimdKernelsMatchScalarWhenOneLengthFillsSeveralChunks) {
 namespace {
 void warm_up(esf::detail::TraceKernelTrials& trials) {
     for (int i = 0; i < esf::detail::TraceKernelTrials::kWarmUpCalls; ++i) {
-        ASSERT_EQ(trials.next(), esf::detail::TraceKernel::kBest);
-        trials.record(esf::detail::TraceKernel::kBest, 1e-6, 1000);
+        ASSERT_EQ(trials.next(), esf::Kernels::kBest);
+        trials.record(esf::Kernels::kBest, 1e-6, 1000);
     }
 }
 }  // namespace
@@ -297,21 +296,21 @@ void warm_up(esf::detail::TraceKernelTrials& trials) {
 // Times are compared per visited cell (calls trace different clouds), and a narrower kernel must
 // beat the widest by the margin.
 TEST(TraceKernelTrials, ComparesTimePerCellAndKeepsTheWidestWithinTheMargin) {
-    using esf::detail::TraceKernel;
+    using esf::Kernels;
     using esf::detail::TraceKernelTrials;
     for (const double narrower_speed : {0.98, 0.90}) {  // time per cell against the widest
         TraceKernelTrials trials;
         if (trials.decided()) return;  // one kernel on this CPU
         warm_up(trials);
         while (!trials.decided()) {
-            const TraceKernel kernel = trials.next();
+            const Kernels kernel = trials.next();
             // The widest traces twice the cells in twice the time: the same time per cell.
-            if (kernel == TraceKernel::kBest)
+            if (kernel == Kernels::kBest)
                 trials.record(kernel, 2.0, 2000);
             else
                 trials.record(kernel, narrower_speed, 1000);
         }
-        EXPECT_EQ(trials.next() == TraceKernel::kBest,
+        EXPECT_EQ(trials.next() == Kernels::kBest,
                   narrower_speed > 1.0 - TraceKernelTrials::kMargin)
             << narrower_speed;
     }
@@ -320,7 +319,7 @@ TEST(TraceKernelTrials, ComparesTimePerCellAndKeepsTheWidestWithinTheMargin) {
 // A narrower kernel far slower than the widest takes no more turns after the round in which it
 // fell behind; one within kDrop takes all its turns.
 TEST(TraceKernelTrials, DropsKernelsFarSlowerThanTheWidestAfterARound) {
-    using esf::detail::TraceKernel;
+    using esf::Kernels;
     using esf::detail::TraceKernelTrials;
     {
         TraceKernelTrials trials;
@@ -330,16 +329,16 @@ TEST(TraceKernelTrials, DropsKernelsFarSlowerThanTheWidestAfterARound) {
          {1.0 + TraceKernelTrials::kDrop + 0.05, 1.0 + TraceKernelTrials::kDrop - 0.05}) {
         TraceKernelTrials trials;
         warm_up(trials);
-        std::vector<TraceKernel> tried;
+        std::vector<Kernels> tried;
         while (!trials.decided() && tried.size() < 100) {
-            const TraceKernel kernel = trials.next();
+            const Kernels kernel = trials.next();
             tried.push_back(kernel);
-            trials.record(kernel, kernel == TraceKernel::kBest ? 1.0 : slower, 1000);
+            trials.record(kernel, kernel == Kernels::kBest ? 1.0 : slower, 1000);
         }
         ASSERT_TRUE(trials.decided());
-        EXPECT_EQ(trials.next(), TraceKernel::kBest) << slower;
+        EXPECT_EQ(trials.next(), Kernels::kBest) << slower;
         const std::size_t kinds = static_cast<std::size_t>(
-            std::find(tried.begin() + 1, tried.end(), TraceKernel::kBest) - tried.begin());
+            std::find(tried.begin() + 1, tried.end(), Kernels::kBest) - tried.begin());
         if (slower > 1.0 + TraceKernelTrials::kDrop) {
             // One round, then the widest alone is left: chosen at once.
             EXPECT_EQ(tried.size(), kinds) << slower;
@@ -351,42 +350,42 @@ TEST(TraceKernelTrials, DropsKernelsFarSlowerThanTheWidestAfterARound) {
     // first, then the widest got twice as fast.
     TraceKernelTrials trials;
     warm_up(trials);
-    std::vector<TraceKernel> tried;
+    std::vector<Kernels> tried;
     while (!trials.decided() && tried.size() < 100) {
-        const TraceKernel kernel = trials.next();
-        const bool widest_again = kernel == TraceKernel::kBest && !tried.empty();
+        const Kernels kernel = trials.next();
+        const bool widest_again = kernel == Kernels::kBest && !tried.empty();
         tried.push_back(kernel);
         trials.record(kernel, widest_again ? 0.5 : 1.0, 1000);
     }
     ASSERT_TRUE(trials.decided());
-    EXPECT_EQ(trials.next(), TraceKernel::kBest);
+    EXPECT_EQ(trials.next(), Kernels::kBest);
     const auto kinds = static_cast<std::size_t>(
-        std::find(tried.begin() + 1, tried.end(), TraceKernel::kBest) - tried.begin());
+        std::find(tried.begin() + 1, tried.end(), Kernels::kBest) - tried.begin());
     EXPECT_EQ(tried.size(), 2 * kinds);
 }
 
 TEST(TraceKernelTrials, TriesEachKernelInTurnThenKeepsTheFastest) {
-    using esf::detail::TraceKernel;
+    using esf::Kernels;
     esf::detail::TraceKernelTrials trials;
     if (trials.decided()) {  // a CPU with one kernel: nothing to try
-        EXPECT_EQ(trials.next(), TraceKernel::kBest);
+        EXPECT_EQ(trials.next(), Kernels::kBest);
         return;
     }
     warm_up(trials);
-    std::vector<TraceKernel> tried;
+    std::vector<Kernels> tried;
     while (!trials.decided() && tried.size() < 100) {
-        const TraceKernel kernel = trials.next();
+        const Kernels kernel = trials.next();
         tried.push_back(kernel);
         // The AVX2 kernel is made the fastest after the first round (at most three kernels).
         const bool later_round = tried.size() > 3;
-        trials.record(kernel, kernel == TraceKernel::kAvx2 && later_round ? 1.0 : 2.0, 1000);
+        trials.record(kernel, kernel == Kernels::kAvx2 && later_round ? 1.0 : 2.0, 1000);
     }
     ASSERT_TRUE(trials.decided());
     const std::size_t kinds = tried.size() / esf::detail::TraceKernelTrials::kRounds;
     ASSERT_EQ(tried.size(), kinds * esf::detail::TraceKernelTrials::kRounds);
-    EXPECT_EQ(tried.front(), TraceKernel::kBest);  // the widest first
+    EXPECT_EQ(tried.front(), Kernels::kBest);  // the widest first
     for (std::size_t i = kinds; i < tried.size(); ++i) EXPECT_EQ(tried[i], tried[i - kinds]);
-    EXPECT_EQ(trials.next(), TraceKernel::kAvx2);
-    trials.record(TraceKernel::kAvx2, 100.0, 1000);  // the choice stays
-    EXPECT_EQ(trials.next(), TraceKernel::kAvx2);
+    EXPECT_EQ(trials.next(), Kernels::kAvx2);
+    trials.record(Kernels::kAvx2, 100.0, 1000);  // the choice stays
+    EXPECT_EQ(trials.next(), Kernels::kAvx2);
 }

@@ -20,9 +20,9 @@
 
 namespace {
 
+using esf::Kernels;
 using esf::KnnIndex;
 using esf::KnnIndexOptions;
-using esf::KnnKernel;
 using esf::KnnNeighbour;
 using esf::test::brute_force;
 using esf::test::expect_identical;
@@ -89,13 +89,13 @@ TEST(KnnIndexErrors, BadIndexInput) {
     const std::vector<std::uint32_t> gap = {0, 2, 2};
     EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, gap); }),
               "knn index: view 1 has no rows (views must be numbered 0 .. V-1 without gaps)");
-    for (KnnKernel kernel : {KnnKernel::kAvx2, KnnKernel::kAvx512}) {
-        if (esf::knn_kernel_supported(kernel)) continue;
+    for (Kernels kernel : {Kernels::kAvx2, Kernels::kAvx512}) {
+        if (esf::kernels_supported(kernel)) continue;
         options.threads = 0;
-        options.kernel = kernel;
+        options.kernels = kernel;
         EXPECT_EQ(error_of([&] { KnnIndex(rows, 2, options); }),
-                  std::string("knn index: kernel ") + esf::to_string(kernel) +
-                      " is not supported by this CPU");
+                  std::string("knn index: kernels ") + esf::to_string(kernel) +
+                      " are not supported by this CPU");
     }
 }
 

@@ -24,9 +24,9 @@
 
 namespace {
 
+using esf::Kernels;
 using esf::KnnIndex;
 using esf::KnnIndexOptions;
-using esf::KnnKernel;
 using esf::KnnNeighbour;
 using esf::test::brute_force;
 using esf::test::expect_identical;
@@ -56,8 +56,8 @@ TEST_P(KnnOracle, MatchesBruteForceOnEsfLikeData) {
         options.weights.resize(dim);
     }
     const std::vector<float> queries = make_queries(rows, dim, 5);
-    for (KnnKernel kernel : supported_kernels()) {
-        options.kernel = kernel;
+    for (Kernels kernel : supported_kernels()) {
+        options.kernels = kernel;
         const KnnIndex index(rows, dim, options);
         for (std::size_t q = 0; q < queries.size() / dim; ++q) {
             const std::span<const float> query(queries.data() + q * dim, dim);
@@ -149,9 +149,9 @@ TEST(KnnIndex, ExactTiesAreOrderedByViewId) {
     std::uniform_int_distribution<int> value(0, 3);
     std::vector<float> rows(n * dim);
     for (float& v : rows) v = static_cast<float>(value(rng));
-    for (KnnKernel kernel : supported_kernels()) {
+    for (Kernels kernel : supported_kernels()) {
         KnnIndexOptions options;
-        options.kernel = kernel;
+        options.kernels = kernel;
         const KnnIndex index(rows, dim, options);
         for (int q = 0; q < 5; ++q) {
             std::vector<float> query(dim);
@@ -216,9 +216,9 @@ TEST(KnnIndex, GroupsMatchBruteForce) {
     for (std::size_t r = 0; r < n; ++r) row_views[r] = static_cast<std::uint32_t>(r % 700);
     std::shuffle(row_views.begin(), row_views.end(), rng);  // 3 or 4 rows per view, scattered
     const std::vector<float> queries = make_queries(rows, dim, 31);
-    for (KnnKernel kernel : supported_kernels()) {
+    for (Kernels kernel : supported_kernels()) {
         KnnIndexOptions options;
-        options.kernel = kernel;
+        options.kernels = kernel;
         const KnnIndex index(rows, dim, row_views, options);
         for (std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{50}}) {
             for (std::size_t q = 0; q < queries.size() / dim; ++q) {
@@ -285,11 +285,11 @@ TEST(KnnIndex, FamiliesMatchBruteForce) {
     for (std::size_t v = 0; v < n; ++v)
         skewed[v] = v % 30 == 0 ? static_cast<std::uint32_t>(1 + v / 30) : 0;
     const std::vector<float> queries = make_queries(rows, dim, 47);
-    for (KnnKernel kernel : supported_kernels()) {
+    for (Kernels kernel : supported_kernels()) {
         for (const int layout : {0, 1, 2}) {
             const bool grouped = layout == 1;
             KnnIndexOptions options;
-            options.kernel = kernel;
+            options.kernels = kernel;
             options.view_families = layout == 0 ? consecutive : grouped ? grouped_families : skewed;
             const KnnIndex index =
                 grouped ? KnnIndex(rows, dim, row_views, options) : KnnIndex(rows, dim, options);

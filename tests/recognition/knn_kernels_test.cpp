@@ -21,9 +21,9 @@
 
 namespace {
 
+using esf::Kernels;
 using esf::KnnIndex;
 using esf::KnnIndexOptions;
-using esf::KnnKernel;
 using esf::KnnNeighbour;
 using esf::test::brute_force;
 using esf::test::expect_identical;
@@ -35,8 +35,8 @@ using esf::test::supported_kernels;
 TEST(KnnKernels, ExactDistanceIsBitIdenticalToScalar) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> value(-1.0f, 1.0f);
-    const auto scalar = esf::detail::knn_kernels(KnnKernel::kScalar);
-    for (KnnKernel kernel : supported_kernels()) {
+    const auto scalar = esf::detail::knn_kernels(Kernels::kPortable);
+    for (Kernels kernel : supported_kernels()) {
         const auto k = esf::detail::knn_kernels(kernel);
         for (std::size_t n :
              {1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 128, 129, 308, 352, 640, 724}) {
@@ -71,8 +71,8 @@ TEST(KnnKernels, SketchBoundIsBitIdenticalToScalar) {
     std::uniform_int_distribution<int> byte(0, 255);
     std::uniform_int_distribution<std::uint32_t> weight(0, 65535);
     std::uniform_real_distribution<double> error(0.0, 1e-3);
-    const auto scalar = esf::detail::knn_kernels(KnnKernel::kScalar);
-    for (KnnKernel kernel : supported_kernels()) {
+    const auto scalar = esf::detail::knn_kernels(Kernels::kPortable);
+    for (Kernels kernel : supported_kernels()) {
         const auto k = esf::detail::knn_kernels(kernel);
         for (std::size_t stride : {16, 32, 48, 64, 80, 96, 128, 640}) {
             for (std::size_t count : {1, 7, 8, 37}) {  // whole groups of 4 and 8 and the rest
@@ -110,13 +110,13 @@ TEST(KnnKernels, EveryKernelGivesIdenticalResults) {
     const std::vector<float> rows = rows_with_duplicates(n, dim, 2);
     const std::vector<float> queries = make_queries(rows, dim, 3);
     KnnIndexOptions options;
-    options.kernel = KnnKernel::kScalar;
+    options.kernels = Kernels::kPortable;
     const KnnIndex reference(rows, dim, options);
     const auto want = reference.search_batch(queries, 20, 1);
-    for (KnnKernel kernel : supported_kernels()) {
-        options.kernel = kernel;
+    for (Kernels kernel : supported_kernels()) {
+        options.kernels = kernel;
         const KnnIndex index(rows, dim, options);
-        EXPECT_EQ(index.kernel(), kernel);
+        EXPECT_EQ(index.kernels(), kernel);
         const auto got = index.search_batch(queries, 20, 1);
         ASSERT_EQ(got.size(), want.size());
         for (std::size_t q = 0; q < got.size(); ++q)
@@ -124,14 +124,14 @@ TEST(KnnKernels, EveryKernelGivesIdenticalResults) {
     }
 }
 
-TEST(KnnKernels, AutoPicksASupportedKernel) {
-    EXPECT_TRUE(esf::knn_kernel_supported(KnnKernel::kAuto));
-    EXPECT_TRUE(esf::knn_kernel_supported(KnnKernel::kScalar));
-    EXPECT_TRUE(esf::knn_kernel_supported(esf::knn_best_kernel()));
-    EXPECT_NE(esf::knn_best_kernel(), KnnKernel::kAuto);
+TEST(KnnKernels, BestPicksSupportedKernels) {
+    EXPECT_TRUE(esf::kernels_supported(Kernels::kBest));
+    EXPECT_TRUE(esf::kernels_supported(Kernels::kPortable));
+    EXPECT_TRUE(esf::kernels_supported(esf::best_kernels()));
+    EXPECT_NE(esf::best_kernels(), Kernels::kBest);
     const KnnIndex index(std::vector<float>{1.0f, 2.0f}, 1);
-    EXPECT_EQ(index.kernel(), esf::knn_best_kernel());
-    EXPECT_STREQ(esf::to_string(KnnKernel::kAvx512), "avx512");
+    EXPECT_EQ(index.kernels(), esf::best_kernels());
+    EXPECT_STREQ(esf::to_string(Kernels::kAvx512), "avx512");
 }
 
 TEST(KnnIndex, BatchIsIdenticalForOneAndTwoThreads) {

@@ -17,7 +17,7 @@
 
 namespace esf::test {
 
-using esf::KnnKernel;
+using esf::Kernels;
 using esf::KnnNeighbour;
 
 /// Brute force in double: distance = sum_i w_i |q_i - x_i| summed in index order; a view's
@@ -73,10 +73,10 @@ inline void expect_identical(const std::vector<KnnNeighbour>& a, const std::vect
     }
 }
 
-inline std::vector<KnnKernel> supported_kernels() {
-    std::vector<KnnKernel> kernels;
-    for (KnnKernel k : {KnnKernel::kScalar, KnnKernel::kAvx2, KnnKernel::kAvx512})
-        if (esf::knn_kernel_supported(k)) kernels.push_back(k);
+inline std::vector<Kernels> supported_kernels() {
+    std::vector<Kernels> kernels;
+    for (Kernels k : {Kernels::kPortable, Kernels::kAvx2, Kernels::kAvx512})
+        if (esf::kernels_supported(k)) kernels.push_back(k);
     return kernels;
 }
 

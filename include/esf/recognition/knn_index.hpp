@@ -28,7 +28,7 @@
 // pairwise), which every kernel (portable, AVX2, AVX-512) reproduces bit for bit; the sketch
 // bounds are integer sums, also bit-identical. Results do not depend on the CPU or the number of
 // threads. Kernels are chosen at run time from what the CPU supports (no -march flags needed);
-// KnnIndexOptions::kernel forces one (for tests and benchmarks).
+// KnnIndexOptions::kernels forces a set (for tests and benchmarks).
 //
 // Groups: several rows may belong to one view (e.g. the CVFH signatures of a view); a view's
 // distance is then the minimum over its rows, as in PCL's recognition pipeline, and the results
@@ -52,19 +52,9 @@
 #include <string>
 #include <vector>
 
+#include "esf/core/kernels.hpp"
+
 namespace esf {
-
-/// Implementations of the distance kernels. kAuto picks the best one the CPU supports.
-enum class KnnKernel { kAuto, kScalar, kAvx2, kAvx512 };
-
-/// "auto", "scalar", "avx2", "avx512".
-const char* to_string(KnnKernel kernel);
-
-/// Whether this CPU can run `kernel` (kAuto and kScalar: always).
-bool knn_kernel_supported(KnnKernel kernel);
-
-/// The kernel kAuto resolves to on this CPU.
-KnnKernel knn_best_kernel();
 
 struct KnnIndexOptions {
     /// Per-dimension weights w_i (finite, >= 0), one per dimension; empty = all 1. For ESF's ten
@@ -73,7 +63,9 @@ struct KnnIndexOptions {
     /// Dimensions summed into one sketch value; 0 = ceil(dimension / 64). 1 = a full 8-bit copy
     /// of every row (the tightest bound, but `dimension` bytes per row to scan).
     int sketch_group = 0;
-    KnnKernel kernel = KnnKernel::kAuto;
+    /// The distance kernels: kBest the widest the CPU runs (best_kernels()); another set must
+    /// be supported by the CPU (kernels_supported()).
+    Kernels kernels = Kernels::kBest;
     /// Family of each view (one per view; numbered 0 .. F-1 without gaps); empty = none. A
     /// search then returns at most one view per family (see the header).
     std::vector<std::uint32_t> view_families;
@@ -152,8 +144,8 @@ class KnnIndex {
     }
     /// Per-dimension weights in use (all 1 when unweighted).
     std::span<const float> weights() const { return weights_; }
-    /// The kernel in use (never kAuto).
-    KnnKernel kernel() const { return kernel_; }
+    /// The kernels in use (never kBest).
+    Kernels kernels() const { return kernels_; }
     /// Dimensions per sketch value, and bytes of sketch per row.
     std::size_t sketch_group() const { return group_; }
     std::size_t sketch_bytes() const { return stride_; }
@@ -182,7 +174,7 @@ class KnnIndex {
     std::vector<float> data_;
     std::vector<float> weights_;
     std::vector<std::uint32_t> row_views_;
-    KnnKernel kernel_ = KnnKernel::kScalar;
+    Kernels kernels_ = Kernels::kPortable;
     std::size_t group_ = 1;
     std::size_t sketch_values_ = 0;  // sums per row before padding
     std::size_t stride_ = 0;         // sketch bytes per row (multiple of 16)

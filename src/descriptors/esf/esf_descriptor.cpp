@@ -40,7 +40,7 @@ struct EsfEstimator::Workspace {
     std::vector<std::uint32_t> occupied;
     std::vector<std::uint8_t> visited;
     detail::TraceScratch trace;
-    detail::TraceKernelTrials trials;  // EsfKernels::kBest: which tracer is fastest here
+    detail::TraceKernelTrials trials;  // Kernels::kBest: which tracer is fastest here
 };
 
 const std::array<const char*, kEsfBlocks>& esf_block_names() {
@@ -48,26 +48,6 @@ const std::array<const char*, kEsfBlocks>& esf_block_names() {
         "a3_in",    "a3_out", "a3_mixed", "d3_in",    "d3_out",
         "d3_mixed", "d2_in",  "d2_out",   "d2_mixed", "d2_ratio"};
     return names;
-}
-
-EsfKernels parse_esf_kernels(const std::string& name) {
-    if (name == "best") return EsfKernels::kBest;
-    if (name == "avx2") return EsfKernels::kAvx2;
-    if (name == "portable") return EsfKernels::kPortable;
-    throw std::invalid_argument("unknown ESF kernels '" + name +
-                                "' (expected best, avx2 or portable)");
-}
-
-const char* to_string(EsfKernels kernels) {
-    switch (kernels) {
-        case EsfKernels::kBest:
-            return "best";
-        case EsfKernels::kAvx2:
-            return "avx2";
-        case EsfKernels::kPortable:
-            return "portable";
-    }
-    return "unknown";
 }
 
 EsfEstimator::EsfEstimator(const EsfOptions& options)
@@ -192,18 +172,6 @@ bool collinear(std::span<const Eigen::Vector3f> points) {
     throw std::invalid_argument(msg.str());
 }
 
-detail::TraceKernel trace_kernel(EsfKernels kernels) {
-    switch (kernels) {
-        case EsfKernels::kAvx2:
-            return detail::TraceKernel::kAvx2;
-        case EsfKernels::kPortable:
-            return detail::TraceKernel::kScalar;
-        case EsfKernels::kBest:
-            break;
-    }
-    return detail::TraceKernel::kBest;
-}
-
 }  // namespace
 
 void require_esf_points(std::size_t finite, std::size_t dropped) {
@@ -321,18 +289,18 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
     const std::size_t lines = 3 * samples;
     ws.occupied.resize(lines + 16);  // + slack for full-width SIMD reads
     ws.visited.resize(lines + 16);
-    const bool trial = opt.kernels == EsfKernels::kBest && !ws.trials.decided();
-    const detail::TraceKernel kernel = trial ? ws.trials.next() : trace_kernel(opt.kernels);
+    const bool trial = opt.kernels == Kernels::kBest && !ws.trials.decided();
+    const Kernels kernels = trial ? ws.trials.next() : opt.kernels;
     const auto trace_start = std::chrono::steady_clock::now();
     detail::trace_lines(ws.grid, std::span(triangles.line_start).first(lines),
                         std::span(triangles.line_end).first(lines),
                         std::span(ws.occupied).first(lines), std::span(ws.visited).first(lines),
-                        ws.trace, kernel, detail::LineEnds::kSetBeforeDilation);
+                        ws.trace, kernels, detail::LineEnds::kSetBeforeDilation);
     if (trial) {
         const double seconds = detail::seconds_since(trace_start);
         std::size_t cells = 0;
         for (std::size_t i = 0; i < lines; ++i) cells += ws.visited[i];
-        ws.trials.record(kernel, seconds, cells);
+        ws.trials.record(kernels, seconds, cells);
     }
 
     // Histograms, counted in integers: every value the reference accumulates in float is a

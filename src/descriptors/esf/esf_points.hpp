@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/finite_points.hpp"
-#include "descriptors/esf/esf_simd.hpp"
+#include "core/simd.hpp"
 #include "descriptors/esf/esf_trace.hpp"
 #include "descriptors/esf/esf_triangles.hpp"
 

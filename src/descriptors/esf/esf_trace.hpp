@@ -1,39 +1,18 @@
 #pragma once
-// Internal: the voxel grid and the 3-D Bresenham line tracer of the ESF descriptor.
-//
-// The grid is a 64^3 bit array (32 KiB, cache resident): cell (x, y, z) is bit
-// x | y << 6 | z << 12. A line is traced from its start cell towards its end cell exactly as
+// Internal: the 3-D Bresenham line tracer of the ESF descriptor, over the voxel grid
+// (esf_voxel_grid.hpp). A line is traced from its start cell towards its end cell exactly as
 // pcl::ESFEstimation::lci does: max(L, 1) cells are visited, L = the largest axis difference,
 // the start cell is counted and the end cell is not.
 
-#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#include "descriptors/esf/esf_voxel_grid.hpp"
+#include "esf/core/kernels.hpp"
+
 namespace esf::detail {
-
-inline constexpr int kGridBits = 6;
-inline constexpr int kGridSide = 1 << kGridBits;  // 64
-inline constexpr int kGridWords = kGridSide * kGridSide * kGridSide / 64;
-
-/// Cell index x | y << 6 | z << 12 of cell (x, y, z), each in [0, 63].
-constexpr std::uint32_t pack_cell(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return x | (y << kGridBits) | (z << (2 * kGridBits));
-}
-
-struct alignas(64) VoxelGrid {
-    using Words = std::array<std::uint64_t, kGridWords>;
-    alignas(64) Words words{};
-
-    void clear() { words.fill(0); }
-    void set(std::uint32_t cell) { words[cell >> 6] |= std::uint64_t{1} << (cell & 63); }
-    bool occupied(std::uint32_t cell) const { return (words[cell >> 6] >> (cell & 63)) & 1; }
-    /// Marks the 26 neighbours of every set cell too (the one-cell dilation of the reference),
-    /// clipped to the first `side` cells of each axis. `simd`: use AVX-512 where the CPU has it
-    /// (the same bits either way).
-    void dilate(int side, bool simd = true);
-};
 
 /// Number of cells a line between two cells visits: max(L, 1).
 inline std::uint32_t visited_cells(std::uint32_t start, std::uint32_t end) {
@@ -68,24 +47,21 @@ enum class LineEnds {
     kSetBeforeDilation,
 };
 
-/// Which kernel trace_lines() runs: the widest the CPU has (default), or a narrower one (tests;
-/// kAvx512: AVX-512 without VPOPCNTD, as on Skylake-SP).
-enum class TraceKernel { kBest, kAvx512, kAvx2, kScalar };
-
 /// For every line i (starts[i] -> ends[i]): occupied[i] = occupied cells on it, visited[i] =
-/// cells visited. Picks the widest SIMD kernel the CPU has at run time (AVX-512, AVX2 or
-/// portable scalar) unless told otherwise; all kernels give identical counts.
+/// cells visited. `kernels`: the widest tracer the CPU has (kBest: AVX-512 counting cells with
+/// VPOPCNTDQ where present), or at most a narrower one (kAvx512: AVX-512 without VPOPCNTDQ, as
+/// on Skylake-SP; kAvx2; kPortable); all give identical counts.
 void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                  std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
                  std::span<std::uint8_t> visited, TraceScratch& scratch,
-                 TraceKernel kernel = TraceKernel::kBest, LineEnds line_ends = LineEnds::kAny);
+                 Kernels kernels = Kernels::kBest, LineEnds line_ends = LineEnds::kAny);
 
 /// The portable kernel.
 void trace_lines_scalar(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                         std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
                         std::span<std::uint8_t> visited);
 
-/// Name of the widest kernel this CPU runs ("avx512-popcnt", "avx512", "avx2" or "scalar").
+/// Name of the widest tracer this CPU runs ("avx512-popcnt", "avx512", "avx2" or "portable").
 const char* trace_kernel_name();
 
 /// Picks the fastest tracing kernel on this CPU by timing the real work: an estimator's first
@@ -109,21 +85,21 @@ class TraceKernelTrials {
     TraceKernelTrials();
     /// Whether the choice is made (at once when the CPU offers one kernel).
     bool decided() const { return decided_; }
-    /// The kernel for the next call: the next one to try, or the choice.
-    TraceKernel next() const;
-    /// Records how long `kernel` (the value next() gave) took to visit `cells` cells.
-    void record(TraceKernel kernel, double seconds, std::size_t cells);
+    /// The kernels for the next call: the next ones to try, or the choice.
+    Kernels next() const;
+    /// Records how long `kernels` (the value next() gave) took to visit `cells` cells.
+    void record(Kernels kernels, double seconds, std::size_t cells);
 
   private:
     void end_round();
 
-    std::vector<TraceKernel> candidates_;
+    std::vector<Kernels> candidates_;
     std::vector<double> best_;   // least time per cell so far, per candidate
     std::vector<bool> dropped_;  // per candidate: no further turns
     std::size_t turn_ = 0;       // the candidate whose turn it is
     int warm_up_left_ = kWarmUpCalls;
     int rounds_ = 0;  // rounds finished
-    TraceKernel chosen_ = TraceKernel::kBest;
+    Kernels chosen_ = Kernels::kBest;
     bool decided_ = false;
 };
 

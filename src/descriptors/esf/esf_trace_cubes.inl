@@ -1,7 +1,7 @@
-// Internal: the AVX-512 group loop of the ESF line tracer (see esf_trace.cpp), included once per
-// instruction set variant with ESF_CUBE_TARGET (the target attribute) and ESF_CUBE_POPCNT (1:
+// Internal: the AVX-512 group loop of the ESF line tracer (see esf_trace_avx512.cpp), included once
+// per instruction set variant with ESF_CUBE_TARGET (the target attribute) and ESF_CUBE_POPCNT (1:
 // count the three looked-up cells with one VPOPCNTD; 0: with three mask tests).
-// No include guard: esf_trace.cpp includes it twice, in two namespaces.
+// No include guard: esf_trace_avx512.cpp includes it twice, in two namespaces.
 
 struct CubeLanes {
     __m512 start, major_step, step1, step2;  // anchor cell arithmetic, in float (exact: < 2^24)

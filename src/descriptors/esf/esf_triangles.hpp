@@ -11,12 +11,17 @@
 #include <cstdint>
 #include <vector>
 
-#include "descriptors/esf/esf_simd.hpp"
+#include "core/simd.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
 
 namespace esf::detail {
 
 inline constexpr int kTopBin = kEsfBins - 1;  // 63
+
+/// Lanes of the fast sampler's blocks, one per lane of an AVX-512 vector: 16 points per step of
+/// the per-point passes, 16 attempts (one per stream) per block of the sampler, 16 triangles per
+/// block of the histograms.
+inline constexpr int kLanes = 16;
 
 /// PCL's pcl_round(float) for a histogram position x >= 0: floor(x + 0.5f) in float (not
 /// round(): 0.49999997f gives 1), by truncation.

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "esf/core/enum_names.hpp"
+#include "esf/core/kernels.hpp"
 #include "esf/core/point_cloud.hpp"
 
 namespace esf {
@@ -53,20 +54,6 @@ struct EnumNames<EsfSampler> {
         {{EsfSampler::kFast, "fast"}, {EsfSampler::kPcl, "pcl"}}};
 };
 
-/// The code paths of the fast sampler. kBest takes what the CPU has, by its feature flags:
-/// AVX-512 (F, BW, VL, DQ) kernels for the per-point passes, sampling, tracing and histograms,
-/// the tracer counting cells with VPOPCNTDQ where present; without AVX-512 the AVX2 line tracer
-/// and portable code for the rest; portable code otherwise.
-enum class EsfKernels {
-    kBest,
-    kAvx2,      ///< at most AVX2: what a CPU without AVX-512 runs
-    kPortable,  ///< no SIMD kernels
-};
-
-/// Parses "best" / "avx2" / "portable"; throws std::invalid_argument naming the value otherwise.
-EsfKernels parse_esf_kernels(const std::string& name);
-const char* to_string(EsfKernels kernels);
-
 /// Accepted point triples per description: the paper's 20,000, the default of every command,
 /// binding and training run that samples point triples.
 inline constexpr int kEsfSamples = 20000;
@@ -79,9 +66,14 @@ struct EsfOptions {
     /// Attempts allowed per requested sample before the cloud is declared degenerate
     /// (PCL loops forever there). Rejections are rare on real clouds (< 1 %).
     int max_attempts_per_sample = 64;
-    /// Which kernels run; each gives the same output bit for bit (for testing, for measuring
-    /// the path another CPU would take, or to rule the kernels out).
-    EsfKernels kernels = EsfKernels::kBest;
+    /// Which kernels the fast sampler runs; each gives the same output bit for bit (for
+    /// testing, for measuring the path another CPU would take, or to rule the kernels out).
+    /// kBest: AVX-512 (F, BW, VL, DQ) kernels for the per-point passes, sampling, tracing and
+    /// histograms, the tracer counting cells with VPOPCNTDQ where present and timing its
+    /// versions on the first calls to keep the fastest (docs/esf.md); AVX2 kernels without
+    /// AVX-512; portable code otherwise. kAvx512, kAvx2: at most those (narrower where the CPU
+    /// lacks them), the tracer without trials; kPortable: no SIMD kernels.
+    Kernels kernels = Kernels::kBest;
 };
 
 struct EsfResult {

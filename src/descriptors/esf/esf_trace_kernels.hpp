@@ -1,0 +1,45 @@
+#pragma once
+// Internal: the line tracers of each instruction set (esf_trace.cpp: the portable one and the
+// choice; esf_trace_avx2.cpp; esf_trace_avx512.cpp), and what they share.
+//
+// The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
+// one line per lane. The AVX-512 kernel's groups hold lines of one length (bucketed, see
+// bucket_lines_avx512), so they run without per-lane masks. The AVX2 kernel's lines are sorted
+// by length: a group runs min(n) cells without masks and only its few longer lanes run on with
+// an activity mask. Gathers are never masked (slow on some CPUs): lanes past their end keep
+// their look-up inside the table and their bits are dropped.
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "descriptors/esf/esf_trace.hpp"
+
+namespace esf::detail {
+
+/// The tracers, narrowest first; the AVX-512 one comes in two builds, counting cells with
+/// VPOPCNTDQ or without.
+enum class Tracer { kPortable, kAvx2, kAvx512, kAvx512Popcount };
+
+/// The widest tracer this CPU runs.
+Tracer widest_tracer();
+
+// A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
+inline constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
+inline constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
+inline constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
+
+/// trace_lines() with AVX-512, for fewer than kMaxPackedLines lines. `skip_known`: the lines
+/// meet LineEnds::kSetBeforeDilation; `with_popcount`: the build that counts with VPOPCNTDQ
+/// (needs avx512_vpopcntdq_available()).
+void trace_lines_avx512(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
+                        std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
+                        std::span<std::uint8_t> visited, TraceScratch& scratch, bool skip_known,
+                        bool with_popcount);
+
+/// trace_lines() with AVX2.
+void trace_lines_avx2(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
+                      std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
+                      std::span<std::uint8_t> visited, TraceScratch& scratch);
+
+}  // namespace esf::detail
