@@ -14,7 +14,6 @@
 namespace {
 
 using esf::detail::lzf_decompress;
-using esf::detail::LzfCopies;
 using esf::detail::LzfDecoded;
 
 bool same(const LzfDecoded& a, const LzfDecoded& b) {
@@ -42,8 +41,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     block.insert(block.end(), data + kHeader, data + size);
 
     std::vector<unsigned char> best(room), portable(room);
-    const LzfDecoded a = lzf_decompress(block, best, room, LzfCopies::kBest);
-    const LzfDecoded b = lzf_decompress(block, portable, room, LzfCopies::kPortable);
+    const LzfDecoded a = lzf_decompress(block, best, room, esf::Kernels::kBest);
+    const LzfDecoded b = lzf_decompress(block, portable, room, esf::Kernels::kPortable);
     if (!same(a, b)) __builtin_trap();
     const std::size_t kept = std::min(a.produced, room);
     if (kept > 0 && std::memcmp(best.data(), portable.data(), kept) != 0) __builtin_trap();

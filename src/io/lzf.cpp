@@ -321,7 +321,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
 }
 
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out,
-                          std::size_t size, LzfCopies copies) {
+                          std::size_t size, Kernels kernels) {
     if (size < out.size()) {
         throw std::invalid_argument("lzf_decompress: output larger than the stated size");
     }
@@ -345,7 +345,7 @@ LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned 
     if (in.size() >= kFastInput && out.size() >= kFastOutput) {
         const unsigned char* const in_fast_end = in_end - kFastInput;
         unsigned char* const out_fast_end = out_end - kFastOutput;
-        bool shuffles = copies == LzfCopies::kBest && avx2_available();
+        bool shuffles = kernels != Kernels::kPortable && avx2_available();
         while (ip <= in_fast_end && op <= out_fast_end) {
             if (shuffles && static_cast<std::size_t>(op - out.data()) >= kMaxDistance) {
                 const FastLoopEnd end = fast_loop_shuffles(ip, op, in_fast_end, out_fast_end);

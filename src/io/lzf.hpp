@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <span>
 
+#include "esf/core/kernels.hpp"
+
 namespace esf::detail {
 
 /// Most bytes lzf_compress() writes for `size` input bytes: literal runs of 32 cost one control
@@ -38,17 +40,17 @@ struct LzfDecoded {
 /// 5 % of reading it.
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out);
 
-/// How the decoder copies tokens once 8192 bytes are out: kBest takes literal runs and back
-/// references of up to 32 bytes on one path without branches where the CPU has AVX2 (the kind
-/// of the next token is unpredictable: about 40 % of the time goes to mispredicted branches
-/// otherwise); kPortable always branches on the kind. Both give the same result.
-enum class LzfCopies { kBest, kPortable };
-
 /// Decodes the first out.size() bytes of a block of `size` bytes (size >= out.size(), else
 /// std::invalid_argument) and checks the rest of its tokens without writing them: the result,
 /// errors included, is the same as decoding the whole block into `size` bytes. For blocks whose
 /// last bytes no one reads: checking a token costs about a fifth of decoding it.
+///
+/// `kernels`: how the decoder copies tokens once 8192 bytes are out. Where the CPU has AVX2 and
+/// the kernels are not kPortable, literal runs and back references of up to 32 bytes take one
+/// path without branches (the kind of the next token is unpredictable: about 40 % of the time
+/// goes to mispredicted branches otherwise); kPortable always branches on the kind. Both give
+/// the same result.
 LzfDecoded lzf_decompress(std::span<const unsigned char> in, std::span<unsigned char> out,
-                          std::size_t size, LzfCopies copies = LzfCopies::kBest);
+                          std::size_t size, Kernels kernels = Kernels::kBest);
 
 }  // namespace esf::detail

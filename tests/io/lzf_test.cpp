@@ -215,7 +215,7 @@ std::pair<esf::detail::LzfDecoded, Bytes> decode_exact(const Bytes& packed, std:
     out.resize(std::min(decoded.produced, room));
     // The portable copies (always branching on the kind of token) give the same result.
     Bytes portable(room);
-    const auto same = lzf_decompress(in, portable, room, esf::detail::LzfCopies::kPortable);
+    const auto same = lzf_decompress(in, portable, room, esf::Kernels::kPortable);
     EXPECT_EQ(same.produced, decoded.produced);
     EXPECT_EQ(same.at, decoded.at);
     EXPECT_EQ(same.error == nullptr, decoded.error == nullptr);
