@@ -34,6 +34,7 @@ struct TrainArgs {
     double distance = kTrainingCameraDistance;
     double max_distance = kTrainingMaxCameraDistance;
     double angles_weight = kEsfAnglesWeight;
+    double primitive_weight = kEsfPrimitiveWeight;
     double min_elevation = kTrainingMinElevation;
     double max_elevation = 90.0;
     std::size_t min_points = 50;
@@ -66,6 +67,7 @@ void run_train(const TrainArgs& args) {
     options.esf.samples = args.samples;
     options.descriptor_options.samples = args.samples;
     options.descriptor_options.angles_weight = args.angles_weight;
+    options.descriptor_options.primitive_weight = args.primitive_weight;
     options.seed = args.seed;
     options.min_points = args.min_points;
     options.threads = args.threads;
@@ -166,6 +168,11 @@ void add_train_command(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--angles-weight", args->angles_weight,
                     "esf-angles: weight of the surface angle histograms against ESF's 1")
+        ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
+    cmd->add_option("--primitive-weight", args->primitive_weight,
+                    "esf-angles: weight of the cylinder-box contrast (primitive fit) against "
+                    "ESF's 1")
         ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
     add_enum_option(*cmd, "--noise", args->noise, "Sensor noise model: kinect or none");

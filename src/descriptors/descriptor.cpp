@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "descriptors/cell_features.hpp"
 #include "descriptors/pcl/baseline_descriptors.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
 #include "esf/descriptors/surface_angles.hpp"
@@ -129,11 +130,11 @@ EsfOptions fast_esf_options(const DescriptorOptions& options) {
     return out;
 }
 
-constexpr std::array<int, kSurfaceAngleBlocks> kAngleBlockSizes = {
-    kSurfaceAngleBins, kSurfaceAngleBins,     kSurfaceAngleBins,
-    kSurfaceAngleBins, kSurfaceViewpointBins, kSurfaceVariationBins};
-constexpr std::array<const char*, kSurfaceAngleBlocks> kAngleBlockNames = {
-    "alpha", "phi", "theta", "s", "beta", "sigma"};
+constexpr std::array<int, kSurfaceAngleBlocks + 1> kAngleBlockSizes = {
+    kSurfaceAngleBins,     kSurfaceAngleBins,     kSurfaceAngleBins, kSurfaceAngleBins,
+    kSurfaceViewpointBins, kSurfaceVariationBins, kPrimitiveBins};
+constexpr std::array<const char*, kSurfaceAngleBlocks + 1> kAngleBlockNames = {
+    "alpha", "phi", "theta", "s", "beta", "sigma", "cylinder-box"};
 
 /// What each baseline computes: known without loading the module.
 DescriptorInfo baseline_info(const std::string& name) {
@@ -262,19 +263,23 @@ class EsfAnglesGlobal final : public GlobalDescriptor {
     explicit EsfAnglesGlobal(const DescriptorOptions& options)
         : info_(registered_info("esf-angles")),
           pool_(fast_esf_options(options)),
-          weight_(options.angles_weight) {}
+          weight_(options.angles_weight),
+          primitive_weight_(options.primitive_weight),
+          seed_(options.seed) {}
     const DescriptorInfo& info() const override { return info_; }
 
     std::vector<Signature> compute(std::span<const Eigen::Vector3f> points) const override {
         const EsfResult esf = pool_.compute(points, info_.name);
-        SurfaceAngleHistograms angles;
-        try {
-            angles = compute_surface_angles(points);
-        } catch (const std::invalid_argument& e) {
-            throw std::invalid_argument(info_.name + ": " + e.what());
-        }
+        const detail::SurfaceCells cells =
+            detail::surface_cells(points, SurfaceAngleOptions{}.cell_size, info_.name);
+        const SurfaceAngleHistograms angles = detail::surface_angles(cells);
+        PrimitiveFitOptions fit_options;
+        fit_options.seed = seed_;
+        const PrimitiveHistogram primitive =
+            primitive_histogram(detail::fit_primitives(cells.cells, cells.cell_size, fit_options));
         Signature signature(static_cast<std::size_t>(kEsfAnglesSize), 0.0f);
-        const double block_share = 1.0 / (kEsfBlocks * (1.0 + weight_));
+        const double total = 1.0 + weight_ + primitive_weight_;
+        const double block_share = 1.0 / (kEsfBlocks * total);
         for (std::size_t begin = 0; begin < esf.descriptor.size(); begin += kEsfBins) {
             double mass = 0.0;
             for (std::size_t i = begin; i < begin + kEsfBins; ++i) mass += esf.descriptor[i];
@@ -282,9 +287,13 @@ class EsfAnglesGlobal final : public GlobalDescriptor {
             for (std::size_t i = begin; i < begin + kEsfBins; ++i)
                 signature[i] = static_cast<float>(esf.descriptor[i] / mass * block_share);
         }
-        const double angle_scale = weight_ / (kSurfaceAngleBlocks * (1.0 + weight_));
+        const double angle_scale = weight_ / (kSurfaceAngleBlocks * total);
         for (std::size_t i = 0; i < angles.size(); ++i)
             signature[esf.descriptor.size() + i] = static_cast<float>(angles[i] * angle_scale);
+        const double primitive_scale = primitive_weight_ / total;
+        for (std::size_t i = 0; i < primitive.size(); ++i)
+            signature[esf.descriptor.size() + angles.size() + i] =
+                static_cast<float>(primitive[i] * primitive_scale);
         return {std::move(signature)};
     }
 
@@ -292,12 +301,18 @@ class EsfAnglesGlobal final : public GlobalDescriptor {
     DescriptorInfo info_;
     EstimatorPool pool_;
     double weight_;
+    double primitive_weight_;
+    std::uint64_t seed_;
 };
 
 constexpr std::array<const char*, 10> kNames = {"esf", "esf-angles", "pcl-esf",  "sdvs", "d2",
                                                 "vfh", "cvfh",       "our-cvfh", "gasd", "shot"};
 
 void validate(const DescriptorOptions& options) {
+    if (!(std::isfinite(options.primitive_weight) && options.primitive_weight >= 0.0))
+        throw std::invalid_argument(
+            "descriptor options: primitive_weight must be finite and >= 0, got " +
+            std::to_string(options.primitive_weight));
     if (!(std::isfinite(options.angles_weight) && options.angles_weight >= 0.0))
         throw std::invalid_argument(
             "descriptor options: angles_weight must be finite and >= 0, got " +

@@ -91,7 +91,10 @@ Settings descriptor_settings(const DescriptorSetup& setup) {
     settings.emplace("descriptor_normal_radius_factor",
                      static_cast<double>(d.normal_radius_factor));
     settings.emplace("descriptor_remove_outliers", std::int64_t{d.remove_outliers ? 1 : 0});
-    if (info.angles_weight) settings.emplace("descriptor_angles_weight", d.angles_weight);
+    if (info.angles_weight) {
+        settings.emplace("descriptor_angles_weight", d.angles_weight);
+        settings.emplace("descriptor_primitive_weight", d.primitive_weight);
+    }
     return settings;
 }
 
@@ -157,8 +160,11 @@ DescriptorSetup read_descriptor_setup(const Settings& settings, const Descriptor
             throw std::invalid_argument("setting descriptor_remove_outliers = " +
                                         std::to_string(remove) + " is not 0 or 1");
         o.remove_outliers = remove == 1;
-        if (info.angles_weight)
+        if (info.angles_weight) {
             o.angles_weight = real_setting(settings, "descriptor_angles_weight", o.angles_weight);
+            o.primitive_weight =
+                real_setting(settings, "descriptor_primitive_weight", o.primitive_weight);
+        }
         check_descriptor_options(kind.name, o);  // throws for options out of range
     }
     return setup;

@@ -37,7 +37,7 @@ using testing::HasSubstr;
 using testing::StartsWith;
 
 const std::map<std::string, int> kDimensions = {
-    {"esf", 640}, {"esf-angles", 724}, {"pcl-esf", 640},  {"sdvs", 192}, {"d2", 64},
+    {"esf", 640}, {"esf-angles", 732}, {"pcl-esf", 640},  {"sdvs", 192}, {"d2", 64},
     {"vfh", 308}, {"cvfh", 308},       {"our-cvfh", 308}, {"gasd", 512}, {"shot", 352},
 };
 
@@ -179,17 +179,20 @@ TEST(DescriptorRegistry, NamesAndInfo) {
 
 TEST(DescriptorRegistry, StoredWeightsExpandOverTheBlocks) {
     const esf::DescriptorInfo info = esf::descriptor_info("esf-angles");
-    std::vector<float> stored(16);
+    std::vector<float> stored(17);
     std::iota(stored.begin(), stored.end(), 1.0f);
     const std::vector<float> w = esf::descriptor_dimension_weights(info, stored);
-    ASSERT_EQ(w.size(), 724u);
+    ASSERT_EQ(w.size(), 732u);
     EXPECT_EQ(w[0], 1.0f);
     EXPECT_EQ(w[639], 10.0f);
     EXPECT_EQ(w[640], 11.0f);  // alpha, 15 bins
     EXPECT_EQ(w[700], 15.0f);  // 640 + 4 x 15 = 700: beta
     EXPECT_EQ(w[715], 15.0f);  // last of beta's 16 bins
     EXPECT_EQ(w[716], 16.0f);  // sigma
-    const std::vector<float> per_bin(724, 0.5f);
+    EXPECT_EQ(w[723], 16.0f);  // last of sigma's 8 bins
+    EXPECT_EQ(w[724], 17.0f);  // cylinder-box
+    EXPECT_EQ(w[731], 17.0f);
+    const std::vector<float> per_bin(732, 0.5f);
     EXPECT_EQ(esf::descriptor_dimension_weights(info, per_bin), per_bin);
     EXPECT_THROW(esf::descriptor_dimension_weights(info, std::vector<float>(10, 1.0f)),
                  std::invalid_argument);
@@ -367,6 +370,7 @@ TEST(EsfAnglesDescriptor, IsEsfThenTheWeightedSurfaceAngles) {
     options.seed = 42;
     options.samples = 5000;
     options.angles_weight = 0.5;
+    options.primitive_weight = 0.25;
     const Points points = partial_cylinder();
     const auto signatures = esf::make_descriptor("esf-angles", options)->compute(points);
     ASSERT_EQ(signatures.size(), 1u);
@@ -376,8 +380,11 @@ TEST(EsfAnglesDescriptor, IsEsfThenTheWeightedSurfaceAngles) {
     esf_options.samples = 5000;
     const auto esf = esf::compute_esf(points, esf_options).descriptor;
     const auto angles = esf::compute_surface_angles(points);
-    // Each of ESF's ten blocks scaled to sum 1 / 10 / 1.5 (its shape kept), each of the six
-    // angle histograms by 0.5 / 6 / 1.5.
+    esf::PrimitiveFitOptions fit_options;
+    fit_options.seed = 42;
+    const auto primitive = esf::primitive_histogram(esf::fit_primitives(points, fit_options));
+    // Each of ESF's ten blocks scaled to sum 1 / 10 / 1.75 (its shape kept), each of the six
+    // angle histograms by 0.5 / 6 / 1.75, the cylinder-box block by 0.25 / 1.75.
     for (std::size_t begin = 0; begin < esf.size(); begin += esf::kEsfBins) {
         double mass = 0.0, scaled = 0.0;
         for (std::size_t i = begin; i < begin + esf::kEsfBins; ++i) {
@@ -385,13 +392,23 @@ TEST(EsfAnglesDescriptor, IsEsfThenTheWeightedSurfaceAngles) {
             scaled += signatures[0][i];
         }
         ASSERT_GT(mass, 0.0) << begin;
-        EXPECT_NEAR(scaled, 1.0 / 10.0 / 1.5, 1e-6) << begin;
+        EXPECT_NEAR(scaled, 1.0 / 10.0 / 1.75, 1e-6) << begin;
         for (std::size_t i = begin; i < begin + esf::kEsfBins; ++i)
-            EXPECT_NEAR(signatures[0][i], esf[i] / mass / 10.0 / 1.5, 1e-7) << i;
+            EXPECT_NEAR(signatures[0][i], esf[i] / mass / 10.0 / 1.75, 1e-7) << i;
     }
     for (std::size_t i = 0; i < angles.size(); ++i)
-        EXPECT_NEAR(signatures[0][esf.size() + i], angles[i] * 0.5f / 6.0f / 1.5f, 1e-7f) << i;
+        EXPECT_NEAR(signatures[0][esf.size() + i], angles[i] * 0.5f / 6.0f / 1.75f, 1e-7f) << i;
+    for (std::size_t i = 0; i < primitive.size(); ++i)
+        EXPECT_NEAR(signatures[0][esf.size() + angles.size() + i], primitive[i] * 0.25f / 1.75f,
+                    1e-7f)
+            << i;
+    EXPECT_GT(primitive[esf::kPrimitiveBins - 1] + primitive[esf::kPrimitiveBins - 2] +
+                  primitive[esf::kPrimitiveBins - 3] + primitive[esf::kPrimitiveBins - 4],
+              0.99f);  // a cylinder: the contrast is positive
     options.angles_weight = -1.0;
+    EXPECT_THROW(esf::make_descriptor("esf-angles", options), std::invalid_argument);
+    options.angles_weight = 1.0;
+    options.primitive_weight = std::numeric_limits<double>::infinity();
     EXPECT_THROW(esf::make_descriptor("esf-angles", options), std::invalid_argument);
 }
 

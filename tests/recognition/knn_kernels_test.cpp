@@ -39,7 +39,7 @@ TEST(KnnKernels, ExactDistanceIsBitIdenticalToScalar) {
     for (Kernels kernel : supported_kernels()) {
         const auto k = esf::detail::knn_kernels(kernel);
         for (std::size_t n :
-             {1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 128, 129, 308, 352, 640, 724}) {
+             {1, 2, 7, 8, 9, 15, 16, 17, 63, 64, 65, 128, 129, 308, 352, 640, 724, 732}) {
             std::vector<float> a(n), b(n), w(n);
             for (std::size_t i = 0; i < n; ++i) {
                 a[i] = value(rng);

@@ -4,7 +4,8 @@
 //
 //   name       dim  signatures  what
 //   esf        640  1           our ESF (fast sampler, seeded)
-//   esf-angles 724  1           ESF + view-relative surface angle histograms (surface_angles.hpp)
+//   esf-angles 732  1           ESF + view-relative surface angle histograms (surface_angles.hpp)
+//                               + the cylinder-box contrast (primitive_fit.hpp)
 //   pcl-esf    640  1           pcl::ESFEstimation of PCL 1.13 (time-seeded: not reproducible)
 //   sdvs       192  1           D2 split by voxel-line class IN, OUT, MIXED (SDVS)
 //   d2          64  1           the plain D2 shape distribution (Osada et al. 2002)
@@ -51,6 +52,7 @@
 
 #include "esf/core/point_cloud.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/descriptors/primitive_fit.hpp"
 #include "esf/descriptors/surface_angles.hpp"
 
 namespace esf {
@@ -60,13 +62,17 @@ inline constexpr int kBaselineDescriptorVersion = 1;
 /// Version of what "esf-angles" adds to ESF (the surface angle histograms and how the blocks are
 /// scaled); that descriptor's stored version is kEsfVersion * 100 + this, so that a change of
 /// either part is refused. 1: ESF's blocks as ESF scales them; 2: every ESF block an equal share;
-/// 3: surface angle cells of 7 mm instead of 1 cm.
-inline constexpr int kSurfaceAnglesVersion = 3;
+/// 3: surface angle cells of 7 mm instead of 1 cm; 4: the primitive fit block
+/// (primitive_fit.hpp).
+inline constexpr int kSurfaceAnglesVersion = 4;
 
 /// "esf-angles": ESF's ten 64-bin blocks, each scaled to an equal share, then the six surface
-/// angle histograms, weighted kEsfAnglesWeight in all against ESF's 1; the signature sums to 1.
-inline constexpr int kEsfAnglesSize = kEsfSize + kSurfaceAngleSize;
+/// angle histograms, weighted kEsfAnglesWeight in all against ESF's 1, then the primitive fit's
+/// cylinder-box contrast (primitive_fit.hpp), weighted kEsfPrimitiveWeight against ESF's 1; the
+/// signature sums to 1.
+inline constexpr int kEsfAnglesSize = kEsfSize + kSurfaceAngleSize + kPrimitiveBins;
 inline constexpr double kEsfAnglesWeight = 1.0;
+inline constexpr double kEsfPrimitiveWeight = 0.2;
 
 /// What a descriptor computes.
 struct DescriptorInfo {
@@ -93,7 +99,7 @@ struct DescriptorInfo {
     /// Configured by ESF's own options (EsfOptions: sampler, grid, attempt budget) rather than
     /// by DescriptorOptions: "esf" (make_esf_descriptor()).
     bool esf_options = false;
-    /// Uses DescriptorOptions::angles_weight: "esf-angles".
+    /// Uses DescriptorOptions::angles_weight and primitive_weight: "esf-angles".
     bool angles_weight = false;
 };
 
@@ -128,6 +134,8 @@ struct DescriptorOptions {
     bool remove_outliers = true;
     /// esf-angles: weight of the surface angle histograms against ESF's 1 (finite, >= 0).
     double angles_weight = kEsfAnglesWeight;
+    /// esf-angles: weight of the primitive fit block against ESF's 1 (finite, >= 0).
+    double primitive_weight = kEsfPrimitiveWeight;
 };
 
 /// One descriptor vector (its length is info().dimension).
