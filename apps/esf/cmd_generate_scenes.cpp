@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli_common.hpp"
+#include "cli_generated_scenes.hpp"
 #include "commands.hpp"
 #include "esf/evaluation/generated_scenes.hpp"
 
@@ -21,35 +22,24 @@ struct GenerateScenesArgs {
     std::string root;
     std::string output;
     std::size_t scenes = 100;
-    std::uint64_t seed = 0;
-    int threads = 0;
-    std::vector<std::string> types;
+    GeneratedSceneArgs generated;
     SensorNoise noise = ClutterOptions{}.noise;
     double min_distance = kClutterMinDistance;
     double max_distance = kClutterMaxDistance;
     double min_elevation = kClutterMinElevation;
     double max_elevation = kClutterMaxElevation;
-    std::string catalog;
-    bool no_catalog = false;
-    GroupOptions groups;
     bool json = false;
 };
 
 void run_generate_scenes(const GenerateScenesArgs& args) {
     SceneGenerationOptions options;
     options.scenes = args.scenes;
-    options.clutter.seed = args.seed;
+    set_generated_scene_options(args.generated, options);
     options.clutter.noise = args.noise;
     options.clutter.min_distance = args.min_distance;
     options.clutter.max_distance = args.max_distance;
     options.clutter.min_elevation = args.min_elevation;
     options.clutter.max_elevation = args.max_elevation;
-    for (const std::string& type : args.types)
-        options.clutter.types.push_back(parse_enum<ClutterType>(type));
-    options.groups = args.groups.selection();
-    options.catalog = args.catalog;
-    options.use_catalog = !args.no_catalog;
-    options.threads = args.threads;
     std::optional<Progress> bar;
     options.progress = [&](std::size_t done, std::size_t total) {
         if (!bar) bar.emplace("scenes", total);
@@ -62,7 +52,7 @@ void run_generate_scenes(const GenerateScenesArgs& args) {
     if (args.json) {
         nlohmann::json out = {{"output", args.output},
                               {"scenes", args.scenes},
-                              {"seed", args.seed},
+                              {"seed", args.generated.seed},
                               {"models", set.models},
                               {"objects", set.objects},
                               {"labelled", set.labelled},
@@ -107,11 +97,7 @@ void add_generate_scenes_command(CLI::App& app) {
     cmd->add_option("-n,--scenes", args->scenes, "Number of scenes")
         ->check(CLI::Range(1, 100000))
         ->capture_default_str();
-    add_seed_option(*cmd, args->seed, "Random seed (layouts, cameras, sensor noise)");
-    add_threads_option(*cmd, args->threads);
-    cmd->add_option("--types", args->types, "Scene types in turn (comma-separated; default: all)")
-        ->delimiter(',')
-        ->check(CLI::IsMember(enum_names<ClutterType>()));
+    add_generated_scene_options(*cmd, args->generated);
     add_enum_option(*cmd, "--noise", args->noise, "Sensor noise model: kinect or none");
     cmd->add_option("--min-distance", args->min_distance, "Nearest camera, metres")
         ->check(CLI::Range(0.1, 10.0))
@@ -127,8 +113,7 @@ void add_generate_scenes_command(CLI::App& app) {
                     "Highest camera, degrees above the table")
         ->check(CLI::Range(1.0, 89.0))
         ->capture_default_str();
-    add_catalog_options(*cmd, args->catalog, args->no_catalog);
-    args->groups.add_to(*cmd);
+    add_generated_scene_model_options(*cmd, args->generated);
     cmd->add_flag("--json", args->json, "Print the run's summary as one JSON object");
     cmd->callback([args] { run_generate_scenes(*args); });
 }

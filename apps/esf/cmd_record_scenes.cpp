@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli_common.hpp"
+#include "cli_generated_scenes.hpp"
 #include "commands.hpp"
 #include "esf/evaluation/scene_sequences.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -27,12 +28,7 @@ struct RecordScenesArgs {
     std::size_t frames = 30;
     double sweep = 30.0;
     double frame_rate = 30.0;
-    std::uint64_t seed = 0;
-    int threads = 0;
-    std::vector<std::string> types;
-    std::string catalog;
-    bool no_catalog = false;
-    GroupOptions groups;
+    GeneratedSceneArgs generated;
 };
 
 /// Each cloud becomes DIR/<its name>/: the same frame `frames` times.
@@ -69,13 +65,7 @@ void run_record_scenes(const RecordScenesArgs& args) {
     options.frames = args.frames;
     options.sweep = args.sweep;
     options.frame_rate = args.frame_rate;
-    options.clutter.seed = args.seed;
-    for (const std::string& type : args.types)
-        options.clutter.types.push_back(parse_enum<ClutterType>(type));
-    options.groups = args.groups.selection();
-    options.catalog = args.catalog;
-    options.use_catalog = !args.no_catalog;
-    options.threads = args.threads;
+    set_generated_scene_options(args.generated, options);
     std::optional<Progress> bar;
     options.progress = [&](std::size_t done, std::size_t total) {
         if (!bar) bar.emplace("sequences", total);
@@ -119,13 +109,8 @@ void add_record_scenes_command(CLI::App& app) {
     cmd->add_option("--frame-rate", args->frame_rate, "Frames a second of the recording's clock")
         ->check(CLI::Range(0.1, 1000.0))
         ->capture_default_str();
-    add_seed_option(*cmd, args->seed, "Random seed (layouts, cameras, sensor noise)");
-    add_threads_option(*cmd, args->threads);
-    cmd->add_option("--types", args->types, "Scene types in turn (comma-separated; default: all)")
-        ->delimiter(',')
-        ->check(CLI::IsMember(enum_names<ClutterType>()));
-    add_catalog_options(*cmd, args->catalog, args->no_catalog);
-    args->groups.add_to(*cmd);
+    add_generated_scene_options(*cmd, args->generated);
+    add_generated_scene_model_options(*cmd, args->generated);
     cmd->callback([args] { run_record_scenes(*args); });
 }
 

@@ -8,15 +8,13 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <utility>
 
 #include "core/atomic_file.hpp"
-#include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/io/cloud_io.hpp"
-#include "esf/mesh/mesh.hpp"
 #include "evaluation/matrix_json.hpp"
+#include "evaluation/scene_generation.hpp"
 
 namespace esf {
 
@@ -54,25 +52,11 @@ GeneratedSceneSet generate_scenes(const std::string& root, const std::string& ou
         throw std::invalid_argument("generate_scenes: at most 100000 scenes, got " +
                                     std::to_string(options.scenes));
     const int threads = resolve_threads(options.threads);
-    const std::vector<PlannedModel> plans =
-        plan_models(root, options.catalog, options.use_catalog, options.groups);
-
-    // Meshes in metres, loaded in parallel (each in the import helper).
-    std::vector<ClutterModel> models(plans.size());
-    parallel_for(plans.size(), threads, [&](std::size_t i) {
-        ClutterModel& m = models[i];
-        m.mesh = load_mesh(plans[i].file.path);
-        m.scale = plans[i].scale(m.mesh);
-        for (Eigen::Vector3f& v : m.mesh.vertices) v = (v.cast<double>() * m.scale).cast<float>();
-        m.category = plans[i].file.category;
-        m.file = plans[i].file.file;
-    });
-    const ClutterComposer composer(std::move(models), options.clutter);
-
-    std::error_code error;
-    fs::create_directories(output, error);
-    if (error || !fs::is_directory(output))
-        throw IoError(file_message(output, 0, "cannot create the output folder"));
+    const ClutterComposer composer(
+        detail::load_clutter_models(root, options.catalog, options.use_catalog, options.groups,
+                                    threads),
+        options.clutter);
+    detail::create_output_folder(output);
 
     GeneratedSceneSet result;
     result.models = composer.models().size();

@@ -22,10 +22,10 @@
 #include "esf/core/parallel.hpp"
 #include "esf/io/kinect_raw.hpp"
 #include "esf/io/kinect_recording.hpp"
-#include "esf/mesh/mesh.hpp"
 #include "esf/render/render.hpp"
 #include "esf/render/view_sphere.hpp"
 #include "evaluation/matrix_json.hpp"
+#include "evaluation/scene_generation.hpp"
 
 namespace esf {
 
@@ -168,26 +168,14 @@ SceneSequenceSet generate_scene_sequences(const std::string& root, const std::st
         options.clutter.camera.height != kKinectFrameHeight)
         throw std::invalid_argument("scene sequences: a Kinect recording is 640 x 480");
     const int threads = resolve_threads(options.threads);
-    const std::vector<PlannedModel> plans =
-        plan_models(root, options.catalog, options.use_catalog, options.groups);
-    std::vector<ClutterModel> models(plans.size());
-    parallel_for(plans.size(), threads, [&](std::size_t i) {
-        ClutterModel& m = models[i];
-        m.mesh = load_mesh(plans[i].file.path);
-        m.scale = plans[i].scale(m.mesh);
-        for (Eigen::Vector3f& v : m.mesh.vertices) v = (v.cast<double>() * m.scale).cast<float>();
-        m.category = plans[i].file.category;
-        m.file = plans[i].file.file;
-    });
     ClutterOptions clutter = options.clutter;
     clutter.wall_share = 0.0;
     clutter.edge_share = 0.0;
-    const ClutterComposer composer(std::move(models), clutter);
-
-    std::error_code error;
-    fs::create_directories(output, error);
-    if (error || !fs::is_directory(output))
-        throw IoError(file_message(output, 0, "cannot create the output folder"));
+    const ClutterComposer composer(
+        detail::load_clutter_models(root, options.catalog, options.use_catalog, options.groups,
+                                    threads),
+        clutter);
+    detail::create_output_folder(output);
 
     std::vector<RenderedSequence> rendered(options.sequences);
     std::mutex progress_mutex;

@@ -1,7 +1,7 @@
 #pragma once
-// The geometry of cluttered table scenes (clutter_scene.cpp): footprints of posed models as 2-D
-// convex hulls on the table, their overlaps and distances, the shape of a model (round, boxy)
-// and the bodies placed on the table.
+// The geometry of cluttered table scenes (clutter_layout.cpp, clutter_scene.cpp): footprints of
+// posed models as 2-D convex hulls on the table, their overlaps and distances, the shape of a
+// model (round, boxy) and the bodies placed on the table.
 
 #include <Eigen/Geometry>
 #include <cstddef>

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 #include "core/number_text.hpp"
 #include "esf/core/error.hpp"
 #include "training/database_connection.hpp"
+#include "training/database_schema.hpp"
 
 namespace esf {
 

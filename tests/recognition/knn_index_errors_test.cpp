@@ -18,18 +18,8 @@
 #include "support/error_of.hpp"
 #include "support/knn_oracle.hpp"
 
+namespace esf::test {
 namespace {
-
-using esf::Kernels;
-using esf::KnnIndex;
-using esf::KnnIndexOptions;
-using esf::KnnNeighbour;
-using esf::test::brute_force;
-using esf::test::expect_identical;
-using esf::test::expect_same;
-using esf::test::make_queries;
-using esf::test::rows_with_duplicates;
-using esf::test::supported_kernels;
 
 TEST(KnnIndex, ExpandBlockWeights) {
     const std::vector<float> blocks = {0.5f, 2.0f};
@@ -143,3 +133,4 @@ TEST(KnnIndexErrors, EmptyIndex) {
 }
 
 }  // namespace
+}  // namespace esf::test

@@ -22,18 +22,8 @@
 #include "support/knn_oracle.hpp"
 #include "support/test_data.hpp"
 
+namespace esf::test {
 namespace {
-
-using esf::Kernels;
-using esf::KnnIndex;
-using esf::KnnIndexOptions;
-using esf::KnnNeighbour;
-using esf::test::brute_force;
-using esf::test::expect_identical;
-using esf::test::expect_same;
-using esf::test::make_queries;
-using esf::test::rows_with_duplicates;
-using esf::test::supported_kernels;
 
 struct OracleCase {
     std::size_t dim;
@@ -374,3 +364,4 @@ TEST(KnnIndex, MemoryPerView) {
 }
 
 }  // namespace
+}  // namespace esf::test

@@ -19,18 +19,8 @@
 #include "esf/recognition/knn_index.hpp"
 #include "support/knn_oracle.hpp"
 
+namespace esf::test {
 namespace {
-
-using esf::Kernels;
-using esf::KnnIndex;
-using esf::KnnIndexOptions;
-using esf::KnnNeighbour;
-using esf::test::brute_force;
-using esf::test::expect_identical;
-using esf::test::expect_same;
-using esf::test::make_queries;
-using esf::test::rows_with_duplicates;
-using esf::test::supported_kernels;
 
 TEST(KnnKernels, ExactDistanceIsBitIdenticalToScalar) {
     std::mt19937 rng(5);
@@ -172,3 +162,4 @@ TEST(KnnIndex, BuildIsIdenticalForOneAndTwoThreads) {
 }
 
 }  // namespace
+}  // namespace esf::test

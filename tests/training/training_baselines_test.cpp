@@ -17,17 +17,8 @@
 #include "support/require_baselines.hpp"
 #include "support/training_fixture.hpp"
 
-namespace esf {
+namespace esf::test {
 namespace {
-
-namespace fs = std::filesystem;
-using esf::test::error_of;
-using esf::test::expect_same;
-using esf::test::fast_options;
-using esf::test::snapshot;
-using esf::test::Snapshot;
-using esf::test::TrainingRunTest;
-using esf::test::TrainingTest;
 
 TrainingOptions baseline_options(const std::string& descriptor) {
     TrainingOptions o = fast_options();
@@ -212,4 +203,4 @@ TEST_F(TrainingRunTest, ViewsABaselineCannotDescribeAreSkippedAndCounted) {
 }
 
 }  // namespace
-}  // namespace esf
+}  // namespace esf::test

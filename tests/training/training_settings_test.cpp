@@ -14,13 +14,8 @@
 #include "support/error_of.hpp"
 #include "support/training_fixture.hpp"
 
-namespace esf {
+namespace esf::test {
 namespace {
-
-namespace fs = std::filesystem;
-using esf::test::error_of;
-using esf::test::fast_options;
-using esf::test::TrainingTest;
 
 TEST_F(TrainingTest, FindModelsListsCategoryFoldersSorted) {
     touch("root/mug/b.ply");
@@ -236,4 +231,4 @@ TEST_F(TrainingTest, BadOptionsAndEmptyRootsAreRejected) {
 }
 
 }  // namespace
-}  // namespace esf
+}  // namespace esf::test

@@ -27,18 +27,8 @@
 #include "support/recursive_collada.hpp"
 #include "support/training_fixture.hpp"
 
-namespace esf {
+namespace esf::test {
 namespace {
-
-namespace fs = std::filesystem;
-using esf::test::box_mesh;
-using esf::test::error_of;
-using esf::test::expect_same;
-using esf::test::fast_options;
-using esf::test::snapshot;
-using esf::test::Snapshot;
-using esf::test::TrainingRunTest;
-using esf::test::TrainingTest;
 
 // KilledProcessResumesToTheSameDatabase runs this test binary again as a training process and
 // kills it with SIGKILL. In that process, ESF_TRAINING_TEST_CHILD="ROOT DB MARKER" makes this
@@ -389,4 +379,4 @@ TEST_F(TrainingRunTest, ViewsAreTakenFromTheCameraDistanceOrFarEnoughToSeeTheMod
 }
 
 }  // namespace
-}  // namespace esf
+}  // namespace esf::test
