@@ -34,8 +34,8 @@ std::pair<bool, bool> cylinder_part(const SurfaceCell& c, const Cylinder& cyl, d
     const double distance = d.norm();
     const bool side = std::abs(distance - cyl.radius) < tol && distance > 0.0 &&
                       d.dot(c.normal) > kNormalAgreement * distance;
-    const bool lid = std::abs(c.normal.dot(cyl.axis)) > kNormalAgreement &&
-                     distance < cyl.radius + tol;
+    const bool lid =
+        std::abs(c.normal.dot(cyl.axis)) > kNormalAgreement && distance < cyl.radius + tol;
     return {side, lid};
 }
 

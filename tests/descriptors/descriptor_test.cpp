@@ -164,8 +164,9 @@ TEST(DescriptorRegistry, NamesAndInfo) {
     EXPECT_EQ(esf::descriptor_sketch_group("esf-like"), 0);  // not registered: the default
     EXPECT_EQ(esf::descriptor_info("esf").blocks, std::vector<int>(10, 64));
     EXPECT_EQ(esf::descriptor_info("esf").block_names[6], "d2_in");
-    EXPECT_EQ(esf::descriptor_info("esf-angles").blocks.size(), 16u);
+    EXPECT_EQ(esf::descriptor_info("esf-angles").blocks.size(), 17u);
     EXPECT_EQ(esf::descriptor_info("esf-angles").block_names[15], "sigma");
+    EXPECT_EQ(esf::descriptor_info("esf-angles").block_names[16], "cylinder-box");
     EXPECT_EQ(esf::descriptor_blocks(esf::descriptor_info("vfh")), std::vector<std::size_t>{308});
     // Versions and search settings come from the registry too.
     EXPECT_EQ(esf::stored_descriptor_version("esf"), esf::kEsfVersion);

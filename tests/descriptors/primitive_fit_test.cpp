@@ -5,10 +5,10 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <fstream>
-#include <sstream>
-#include <string>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "core/csv.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -26,7 +26,8 @@ constexpr double kPi = 3.14159265358979323846;
 /// What a sensor at the origin sees of a cylinder (radius r, height 12 cm, axis along y, centre
 /// 0.8 m ahead): the front half of its side on a 1 degree by 2 mm grid, and with `lid` its top
 /// disc on a 2 mm grid (as seen from above when the axis is tilted towards the sensor).
-Points cylinder_view(double r, bool lid, const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity()) {
+Points cylinder_view(double r, bool lid,
+                     const Eigen::Matrix3d& turn = Eigen::Matrix3d::Identity()) {
     Points points;
     const Eigen::Vector3d centre(0.0, 0.0, 0.8);
     const auto add = [&](const Eigen::Vector3d& p) {
@@ -72,8 +73,8 @@ TEST(PrimitiveFit, ACylinderSideIsACylinderOfItsRadiusAndAxis) {
 
 TEST(PrimitiveFit, ALidCountsForTheCylinder) {
     // Tilted 40 degrees about x so that the sensor sees the top disc and the side.
-    const Eigen::Matrix3d turn = Eigen::AngleAxisd(-40.0 * kPi / 180.0, Eigen::Vector3d::UnitX())
-                                     .toRotationMatrix();
+    const Eigen::Matrix3d turn =
+        Eigen::AngleAxisd(-40.0 * kPi / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
     const PrimitiveFit fit = fit_primitives(cylinder_view(0.05, true, turn));
     EXPECT_GT(fit.cylinder, 0.85);
     EXPECT_GT(fit.cylinder, fit.box);
@@ -107,8 +108,8 @@ TEST(PrimitiveFit, TheSameSeedGivesTheSameFitAndOthersAgree) {
 }
 
 TEST(PrimitiveFit, FewCellsFitNothing) {
-    const Points points = {{0.0f, 0.0f, 1.0f}, {0.01f, 0.0f, 1.0f}, {0.0f, 0.01f, 1.0f},
-                           {0.01f, 0.01f, 1.0f}};
+    const Points points = {
+        {0.0f, 0.0f, 1.0f}, {0.01f, 0.0f, 1.0f}, {0.0f, 0.01f, 1.0f}, {0.01f, 0.01f, 1.0f}};
     const PrimitiveFit fit = fit_primitives(points);
     EXPECT_LT(fit.cells, 10u);
     EXPECT_EQ(fit.cylinder, 0.0);
@@ -187,7 +188,7 @@ TEST(PrimitiveFit, RealCansFitCylindersAndRealBoxesFitBoxes) {
     RecordProperty("boxes_of_boxes", box_fits);
     EXPECT_EQ(cans, 63);
     EXPECT_EQ(boxes, 141);
-    EXPECT_GE(cylinders, 57) << "of " << cans << " cans";     // 90 %
+    EXPECT_GE(cylinders, 57) << "of " << cans << " cans";    // 90 %
     EXPECT_GE(box_fits, 120) << "of " << boxes << " boxes";  // 85 %
 }
 

@@ -72,7 +72,7 @@ inline constexpr int kSurfaceAnglesVersion = 4;
 /// signature sums to 1.
 inline constexpr int kEsfAnglesSize = kEsfSize + kSurfaceAngleSize + kPrimitiveBins;
 inline constexpr double kEsfAnglesWeight = 1.0;
-inline constexpr double kEsfPrimitiveWeight = 0.2;
+inline constexpr double kEsfPrimitiveWeight = 0.1;
 
 /// What a descriptor computes.
 struct DescriptorInfo {
