@@ -2,7 +2,8 @@
 // 11-bit frame to an organised cloud, segmentation, description and classification of every
 // object, and the tracks' update, frame after frame of a recording (read into memory first).
 //
-//   live_bench --db DB --recording DIR [--threads N] [benchmark flags]
+//   live_bench --db DB --recording DIR [--threads N] [--fusion models|likelihood]
+//              [benchmark flags]
 //
 // DB: a training database (default $ESF_BENCH_DB or /tmp/esf_all.sqlite); DIR: a recording of
 // esf record-scenes, e.g. a mixed table of 5-7 objects:
@@ -27,13 +28,14 @@
 namespace {
 
 int g_threads = 1;
+esf::TrackingOptions g_tracking;
 std::unique_ptr<esf::Recognizer> g_recognizer;
 std::vector<esf::KinectFrame> g_frames;
 
 void BM_LiveFrame(benchmark::State& state) {
     esf::SegmentationOptions segmentation;
     segmentation.threads = g_threads;
-    esf::ObjectTracker tracker;
+    esf::ObjectTracker tracker(g_tracking);
     std::size_t index = 0, objects = 0;
     for (auto _ : state) {
         const esf::KinectFrame& frame = g_frames[index++ % g_frames.size()];
@@ -67,6 +69,8 @@ int main(int argc, char** argv) {
             recording = argv[++i];
         else if (arg == "--threads" && i + 1 < argc)
             g_threads = std::atoi(argv[++i]);
+        else if (arg == "--fusion" && i + 1 < argc)
+            g_tracking.fusion = esf::parse_enum<esf::FusionRule>(argv[++i]);
         else
             rest.push_back(argv[i]);
     }
@@ -84,8 +88,9 @@ int main(int argc, char** argv) {
     g_recognizer = std::make_unique<esf::Recognizer>(db, options);
     esf::KinectRecordingReader reader(recording);
     while (auto frame = reader.next()) g_frames.push_back(std::move(*frame));
-    std::fprintf(stderr, "live_bench: %s, %zu frames of %s, %d thread(s)\n", db.c_str(),
-                 g_frames.size(), recording.c_str(), g_threads);
+    std::fprintf(stderr, "live_bench: %s, %zu frames of %s, %d thread(s), fusion rule %s\n",
+                 db.c_str(), g_frames.size(), recording.c_str(), g_threads,
+                 esf::to_string(g_tracking.fusion));
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

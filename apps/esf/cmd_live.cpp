@@ -280,7 +280,10 @@ void add_live_command(CLI::App& app) {
         "depth and RGB, 640 x 480), or from a recording (--recording DIR, or fakenect DIR esf "
         "live DB). Each frame is segmented and its objects classified as by esf scene; an "
         "object is the same across frames when it stands within --match-distance of where a "
-        "track last saw it, and each track sums its frames' class log-likelihoods. Prints one "
+        "track last saw it, and each track fuses its frames (--fusion models: each frame's k "
+        "nearest models earn by how much nearer than the k-th they are, weighed by how far the "
+        "best class stands out, and the track names the class of the model that earned most; "
+        "likelihood: summed class log-likelihoods). Prints one "
         "JSON line per processed frame on stdout: {frame, time, skipped, message, objects: "
         "[{class, confidence, track, centroid, size, points}], tracks: [{id, class, "
         "confidence, frames, misses, position}]} (metres, camera frame; a track's position is "
@@ -316,6 +319,9 @@ void add_live_command(CLI::App& app) {
                     "Frames in a row a track survives unseen")
         ->check(CLI::Range(0, 1000))
         ->capture_default_str();
+    add_enum_option(*cmd, "--fusion", args->tracking.fusion,
+                    "How a track fuses its frames: models (the nearest models' earnings summed "
+                    "over the frames) or likelihood (summed class log-likelihoods)");
     add_segmentation_options(*cmd, args->input);
     cmd->callback([args] { run_live(*args); });
 }

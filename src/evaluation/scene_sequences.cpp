@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -215,7 +216,9 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
     const std::string truth_path = (fs::path(folder) / "sequences.json").string();
     const nlohmann::json truth = read_json(truth_path);
     SequenceFusionResult result;
-    for (const std::size_t c : options.checkpoints) result.points.push_back({c, 0, 0, 0, 0});
+    for (const std::size_t c : options.checkpoints) result.points.push_back({c, 0, 0, 0, 0, 0});
+    std::set<std::string> known;  // the classes of the database's views
+    for (const ViewLabel& label : recognizer.classifier().labels()) known.insert(label.class_name);
     using Clock = std::chrono::steady_clock;
     try {
         for (const nlohmann::json& sequence : truth.at("sequences")) {
@@ -270,13 +273,17 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
                             if (t.id == update.object_track[best])
                                 fused = t.class_name() == true_class;
                     }
+                    const bool unknown = !known.contains(true_class);
                     ++result.frame_objects;
                     result.frame_single_right += single;
+                    result.frame_fused_right += fused;
+                    result.frame_unknown += unknown;
                     if (point) {
                         ++point->objects;
                         point->found += best < scene.objects.size();
                         point->single_right += single;
                         point->fused_right += fused;
+                        point->unknown += unknown;
                     }
                 }
             }

@@ -13,22 +13,59 @@ namespace {
 
 const std::string kNoClass;
 
-/// The classes of a track from its excess sums: fused log-likelihoods and confidences.
-std::vector<FusedClass> fuse(const std::vector<std::pair<std::string, double>>& excess,
-                             std::size_t evidence_frames, double floor) {
+/// kClassLikelihood: the classes of a track from its excess sums, fused log-likelihoods and
+/// confidences.
+std::vector<FusedClass> fuse_likelihoods(const std::vector<std::pair<std::string, double>>& excess,
+                                         std::size_t evidence_frames, double floor) {
     std::vector<FusedClass> classes;
     if (evidence_frames == 0) return classes;
     const double base = static_cast<double>(evidence_frames) * std::log(floor);
     double best = -std::numeric_limits<double>::infinity();
     for (const auto& [name, sum] : excess) {
-        classes.push_back({name, base + sum, 0.0});
+        classes.push_back({name, base + sum, 0.0, {}, 0});
         best = std::max(best, base + sum);
     }
     double total = 0.0;
-    for (const FusedClass& c : classes) total += std::exp(c.log_likelihood - best);
-    for (FusedClass& c : classes) c.confidence = std::exp(c.log_likelihood - best) / total;
+    for (const FusedClass& c : classes) total += std::exp(c.score - best);
+    for (FusedClass& c : classes) c.confidence = std::exp(c.score - best) / total;
     std::sort(classes.begin(), classes.end(), [](const FusedClass& a, const FusedClass& b) {
-        if (a.log_likelihood != b.log_likelihood) return a.log_likelihood > b.log_likelihood;
+        if (a.score != b.score) return a.score > b.score;
+        return a.class_name < b.class_name;
+    });
+    return classes;
+}
+
+/// kNearestModels: the classes of a track from its models' tallies (ObjectTracker's private
+/// ModelTally, hence the template), each scored by its best model, most likely first (ties:
+/// more nearest frames, then the name).
+template <typename Tally>
+std::vector<FusedClass> fuse_models(const std::vector<Tally>& models) {
+    std::vector<FusedClass> classes;
+    for (const Tally& m : models) {
+        auto it = std::find_if(classes.begin(), classes.end(),
+                               [&](const FusedClass& c) { return c.class_name == m.class_name; });
+        if (it == classes.end()) {
+            classes.push_back({m.class_name, m.score, 0.0, m.model_name, m.nearest});
+            continue;
+        }
+        it->nearest += m.nearest;
+        if (m.score > it->score || (m.score == it->score && m.model_name < it->model)) {
+            it->score = m.score;
+            it->model = m.model_name;
+        }
+    }
+    double total = 0.0;
+    std::size_t nearest = 0;
+    for (const FusedClass& c : classes) {
+        total += c.score;
+        nearest += c.nearest;
+    }
+    for (FusedClass& c : classes)
+        c.confidence = total > 0.0 ? c.score / total
+                                   : static_cast<double>(c.nearest) / static_cast<double>(nearest);
+    std::sort(classes.begin(), classes.end(), [](const FusedClass& a, const FusedClass& b) {
+        if (a.score != b.score) return a.score > b.score;
+        if (a.nearest != b.nearest) return a.nearest > b.nearest;
         return a.class_name < b.class_name;
     });
     return classes;
@@ -62,6 +99,57 @@ std::vector<ClassEvidence> class_evidence(const Classification& c) {
     return out;
 }
 
+std::vector<ModelEvidence> model_evidence(const Classification& c) {
+    std::vector<ModelEvidence> out;
+    for (const NeighbourView& n : c.neighbours) {
+        const auto same = [&](const ModelEvidence& m) {
+            return m.class_name == n.class_name && m.model_name == n.model_name;
+        };
+        const auto it = std::find_if(out.begin(), out.end(), same);
+        if (it == out.end())
+            out.push_back({n.class_name, n.model_name, n.distance});
+        else
+            it->distance = std::min(it->distance, n.distance);
+    }
+    // Verification may have put the best fit first: nearest first again.
+    std::stable_sort(out.begin(), out.end(), [](const ModelEvidence& a, const ModelEvidence& b) {
+        return a.distance < b.distance;
+    });
+    return out;
+}
+
+std::vector<ModelScore> model_scores(std::span<const ModelEvidence> models) {
+    for (std::size_t i = 0; i < models.size(); ++i) {
+        const double d = models[i].distance;
+        if (!(std::isfinite(d) && d >= 0.0))
+            throw std::invalid_argument("model " + std::to_string(i) + " ('" +
+                                        models[i].model_name +
+                                        "') has a negative or non-finite distance");
+        if (i > 0 && d < models[i - 1].distance)
+            throw std::invalid_argument("models must come nearest first, but model " +
+                                        std::to_string(i) + " ('" + models[i].model_name +
+                                        "') is nearer than the one before it");
+    }
+    std::vector<ModelScore> out;
+    if (models.empty()) return out;
+    for (const ModelEvidence& m : models) out.push_back({m.class_name, m.model_name, 0.0});
+    const double nearest = models.front().distance, farthest = models.back().distance;
+    if (!(farthest > nearest)) {  // one distance for all (k = 1): a plain vote
+        out.front().score = 1.0;
+        return out;
+    }
+    double other = farthest;
+    for (const ModelEvidence& m : models)
+        if (m.class_name != models.front().class_name) {
+            other = m.distance;
+            break;
+        }
+    const double weight = other > 0.0 ? 1.0 - nearest / other : 0.0;
+    for (std::size_t i = 0; i < models.size(); ++i)
+        out[i].score = weight * (1.0 - models[i].distance / farthest);
+    return out;
+}
+
 std::vector<TrackedObservation> scene_observations(const SceneRecognition& scene) {
     std::vector<TrackedObservation> out;
     out.reserve(scene.objects.size());
@@ -70,7 +158,10 @@ std::vector<TrackedObservation> scene_observations(const SceneRecognition& scene
         const Eigen::Vector3f& c = o.cluster.centroid;
         t.position =
             scene.plane_found ? Eigen::Vector3f(c - scene.plane.height(c) * scene.plane.normal) : c;
-        if (o.classified()) t.evidence = class_evidence(o.classification);
+        if (o.classified()) {
+            t.evidence = class_evidence(o.classification);
+            t.models = model_evidence(o.classification);
+        }
         out.push_back(std::move(t));
     }
     return out;
@@ -94,10 +185,20 @@ TrackUpdate ObjectTracker::update(const SceneRecognition& scene) {
 }
 
 TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observations) {
-    for (std::size_t i = 0; i < observations.size(); ++i)
+    const bool by_models = options_.fusion == FusionRule::kNearestModels;
+    // Checked (and scored) before anything changes, so that a refused frame leaves no trace.
+    std::vector<std::vector<ModelScore>> scores(observations.size());
+    for (std::size_t i = 0; i < observations.size(); ++i) {
         if (!observations[i].position.allFinite())
             throw std::invalid_argument("tracked object " + std::to_string(i) +
                                         " has a non-finite position");
+        if (!by_models) continue;
+        try {
+            scores[i] = model_scores(observations[i].models);
+        } catch (const std::invalid_argument& e) {
+            throw std::invalid_argument("tracked object " + std::to_string(i) + ": " + e.what());
+        }
+    }
     TrackUpdate result;
     result.frame = frames_;
     result.object_track.assign(observations.size(), 0);
@@ -120,18 +221,38 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
     }
 
     const double log_floor = std::log(options_.evidence_floor);
-    auto observe = [&](std::size_t t, const TrackedObservation& obs) {
+    auto observe = [&](std::size_t t, std::size_t o) {
+        const TrackedObservation& obs = observations[o];
         ObjectTrack& track = tracks_[t];
         track.position = obs.position;
         ++track.frames;
         track.misses = 0;
         track.last_frame = frames_;
+        if (by_models) {
+            if (scores[o].empty()) return;
+            ++track.evidence_frames;
+            std::vector<ModelTally>& tallies = sums_[t].models;
+            for (std::size_t i = 0; i < scores[o].size(); ++i) {
+                const ModelScore& s = scores[o][i];
+                auto it = std::find_if(tallies.begin(), tallies.end(), [&](const ModelTally& m) {
+                    return m.class_name == s.class_name && m.model_name == s.model_name;
+                });
+                if (it == tallies.end()) {
+                    tallies.push_back({s.class_name, s.model_name, 0.0, 0});
+                    it = tallies.end() - 1;
+                }
+                it->score += s.score;
+                it->nearest += i == 0;
+            }
+            track.classes = fuse_models(tallies);
+            return;
+        }
         if (obs.evidence.empty()) return;
         ++track.evidence_frames;
+        auto& sums = sums_[t].excess;
         for (const ClassEvidence& e : obs.evidence) {
             const double gain =
                 std::log(std::max(e.probability, options_.evidence_floor)) - log_floor;
-            auto& sums = excess_[t];
             auto it = std::find_if(sums.begin(), sums.end(),
                                    [&](const auto& s) { return s.first == e.class_name; });
             if (it == sums.end())
@@ -139,25 +260,25 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
             else
                 it->second += gain;
         }
-        track.classes = fuse(excess_[t], track.evidence_frames, options_.evidence_floor);
+        track.classes = fuse_likelihoods(sums, track.evidence_frames, options_.evidence_floor);
     };
 
     // Seen tracks are updated, missed ones age and end past max_misses.
     std::vector<ObjectTrack> kept;
-    std::vector<std::vector<std::pair<std::string, double>>> kept_excess;
+    std::vector<Sums> kept_sums;
     for (std::size_t t = 0; t < tracks_.size(); ++t) {
         if (track_object[t] < observations.size()) {
-            observe(t, observations[track_object[t]]);
+            observe(t, track_object[t]);
             result.object_track[track_object[t]] = tracks_[t].id;
         } else if (++tracks_[t].misses > static_cast<std::size_t>(options_.max_misses)) {
             result.ended.push_back(tracks_[t]);
             continue;
         }
         kept.push_back(std::move(tracks_[t]));
-        kept_excess.push_back(std::move(excess_[t]));
+        kept_sums.push_back(std::move(sums_[t]));
     }
     tracks_ = std::move(kept);
-    excess_ = std::move(kept_excess);
+    sums_ = std::move(kept_sums);
 
     // New tracks for the objects no track took, in the objects' order.
     for (std::size_t o = 0; o < observations.size(); ++o) {
@@ -166,8 +287,8 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
         track.id = next_id_++;
         track.first_frame = frames_;
         tracks_.push_back(track);
-        excess_.emplace_back();
-        observe(tracks_.size() - 1, observations[o]);
+        sums_.emplace_back();
+        observe(tracks_.size() - 1, o);
         result.object_track[o] = track.id;
         result.born.push_back(track.id);
     }

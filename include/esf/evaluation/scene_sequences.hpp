@@ -74,18 +74,24 @@ struct SequenceFusionPoint {
     std::size_t found = 0;         ///< of them, matched by an object of the frame
     std::size_t single_right = 0;  ///< named right by that frame alone
     std::size_t fused_right = 0;   ///< named right by the object's track
+    /// Of `objects`, those of a class the database has no model of: never named right, and
+    /// counted in `objects` all the same.
+    std::size_t unknown = 0;
 };
 
 struct SequenceFusionResult {
     std::vector<SequenceFusionPoint> points;  ///< per checkpoint (those within the sequences)
     std::size_t frame_objects = 0;            ///< true objects seen, summed over every frame
     std::size_t frame_single_right = 0;       ///< of them, named right by their frame alone
+    std::size_t frame_fused_right = 0;        ///< of them, named right by their track then
+    std::size_t frame_unknown = 0;            ///< of them, of a class the database has no model of
     std::size_t frames = 0;                   ///< frames processed
     double seconds = 0.0;  ///< frames' processing time (segment, recognise, track)
 };
 
 /// Plays each recording of a generate_scene_sequences() folder through segmentation,
-/// recognition and tracking, and scores the tracks' classes against sequences.json. Throws
+/// recognition and tracking (options.tracking, its fusion rule included), and scores the
+/// tracks' classes against sequences.json. Throws
 /// esf::IoError naming a bad file.
 SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
                                               const std::string& folder,
