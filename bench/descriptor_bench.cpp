@@ -11,7 +11,9 @@
 
 #include "bench_data.hpp"
 #include "descriptors/esf/esf_trace.hpp"
+#include "esf/descriptors/descriptor.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
+#include "esf/descriptors/primitive_fit.hpp"
 #include "esf/descriptors/surface_angles.hpp"
 #include "esf/io/cloud_io.hpp"
 
@@ -84,6 +86,39 @@ void BM_SurfaceAnglesRealMilk(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_SurfaceAnglesRealMilk)->Unit(benchmark::kMillisecond);
+
+void BM_PrimitiveFitCylinder(benchmark::State& state) {
+    const esf::Points points = partial_cylinder(static_cast<std::size_t>(state.range(0)));
+    for (auto _ : state) benchmark::DoNotOptimize(esf::fit_primitives(points));
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_PrimitiveFitCylinder)->Arg(2000)->Arg(15000)->Unit(benchmark::kMillisecond);
+
+void BM_PrimitiveFitRealMilk(benchmark::State& state) {
+    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
+    if (!std::filesystem::exists(file)) {
+        state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
+        return;
+    }
+    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    for (auto _ : state) benchmark::DoNotOptimize(esf::fit_primitives(points));
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_PrimitiveFitRealMilk)->Unit(benchmark::kMillisecond);
+
+/// The whole default signature (ESF, surface angles, cylinder-box) of a real view.
+void BM_EsfAnglesRealMilk(benchmark::State& state) {
+    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
+    if (!std::filesystem::exists(file)) {
+        state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
+        return;
+    }
+    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    const auto descriptor = esf::make_descriptor("esf-angles");
+    for (auto _ : state) benchmark::DoNotOptimize(descriptor->compute(points));
+    state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_EsfAnglesRealMilk)->Unit(benchmark::kMillisecond);
 
 void BM_EsfBatchAllCores(benchmark::State& state) {
     std::vector<esf::Points> clouds(64, partial_cylinder(15000));
