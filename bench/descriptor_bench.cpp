@@ -51,13 +51,20 @@ void BM_EsfPclSamplerCylinder(benchmark::State& state) {
 }
 BENCHMARK(BM_EsfPclSamplerCylinder)->Unit(benchmark::kMillisecond);
 
-void BM_EsfFastRealMilk(benchmark::State& state) {
+/// The real view milk_test.pcd (finite points), or none after marking `state` skipped when the
+/// shared data is missing.
+esf::Points milk_view(benchmark::State& state) {
     const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
     if (!std::filesystem::exists(file)) {
         state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
-        return;
+        return {};
     }
-    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    return esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+}
+
+void BM_EsfFastRealMilk(benchmark::State& state) {
+    const esf::Points points = milk_view(state);
+    if (points.empty()) return;
     esf::EsfEstimator estimator;
     for (auto _ : state) benchmark::DoNotOptimize(estimator.compute(points));
     state.SetItemsProcessed(state.iterations());
@@ -76,12 +83,8 @@ BENCHMARK(BM_SurfaceAnglesCylinder)
     ->Unit(benchmark::kMillisecond);
 
 void BM_SurfaceAnglesRealMilk(benchmark::State& state) {
-    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
-    if (!std::filesystem::exists(file)) {
-        state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
-        return;
-    }
-    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    const esf::Points points = milk_view(state);
+    if (points.empty()) return;
     for (auto _ : state) benchmark::DoNotOptimize(esf::compute_surface_angles(points));
     state.SetItemsProcessed(state.iterations());
 }
@@ -95,12 +98,8 @@ void BM_PrimitiveFitCylinder(benchmark::State& state) {
 BENCHMARK(BM_PrimitiveFitCylinder)->Arg(2000)->Arg(15000)->Unit(benchmark::kMillisecond);
 
 void BM_PrimitiveFitRealMilk(benchmark::State& state) {
-    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
-    if (!std::filesystem::exists(file)) {
-        state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
-        return;
-    }
-    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    const esf::Points points = milk_view(state);
+    if (points.empty()) return;
     for (auto _ : state) benchmark::DoNotOptimize(esf::fit_primitives(points));
     state.SetItemsProcessed(state.iterations());
 }
@@ -108,12 +107,8 @@ BENCHMARK(BM_PrimitiveFitRealMilk)->Unit(benchmark::kMillisecond);
 
 /// The whole default signature (ESF, surface angles, cylinder-box) of a real view.
 void BM_EsfAnglesRealMilk(benchmark::State& state) {
-    const std::filesystem::path file = esf::bench::data_dir() / "real/pcl/milk_test.pcd";
-    if (!std::filesystem::exists(file)) {
-        state.SkipWithError(("shared data missing: " + file.string() + " (set ESF_DATA)").c_str());
-        return;
-    }
-    const esf::Points points = esf::drop_non_finite(esf::read_cloud(file.string()).points).points;
+    const esf::Points points = milk_view(state);
+    if (points.empty()) return;
     const auto descriptor = esf::make_descriptor("esf-angles");
     for (auto _ : state) benchmark::DoNotOptimize(descriptor->compute(points));
     state.SetItemsProcessed(state.iterations());
