@@ -143,6 +143,11 @@ nlohmann::json frame_json(std::size_t frame, double time, std::size_t skipped,
             entry["class"] = t.class_name();
         else
             entry["class"] = nullptr;
+        // The fused class's best model (fusion "models"; null for "likelihood").
+        if (t.has_class() && !t.classes.front().model.empty())
+            entry["model"] = t.classes.front().model;
+        else
+            entry["model"] = nullptr;
         entry["confidence"] = rounded(t.confidence());
         entry["frames"] = t.frames;
         entry["misses"] = t.misses;
@@ -286,7 +291,8 @@ void add_live_command(CLI::App& app) {
         "likelihood: summed class log-likelihoods). Prints one "
         "JSON line per processed frame on stdout: {frame, time, skipped, message, objects: "
         "[{class, confidence, track, centroid, size, points}], tracks: [{id, class, "
-        "confidence, frames, misses, position}]} (metres, camera frame; a track's position is "
+        "model, confidence, frames, misses, position}]} (metres, camera frame; a track's position "
+        "is "
         "on the table plane); a status line on stderr when it is a terminal, and a summary "
         "line at the end. Frames that arrive while one is processed replace it and are "
         "counted as skipped. Ends at --frames, --seconds, the end of a recording or Ctrl-C "

@@ -36,6 +36,11 @@ if [[ $mode == recording ]]; then
     python3 -c "import json,sys; l=[json.loads(x) for x in open('out.jsonl')];
 sys.exit(0 if any(t['frames'] >= 3 for t in l[-1]['tracks']) else 1)" ||
         fail "no track lasted 3 frames: $(tail -1 out.jsonl)"
+    # A named track names its class's best model (generated models are gen_CLASS_NNN).
+    python3 -c "import json,sys; l=[json.loads(x) for x in open('out.jsonl')];
+named=[t for f in l for t in f['tracks'] if t['class']];
+sys.exit(0 if named and all(t['model'].startswith('gen_' + t['class'] + '_') for t in named) else 1)" ||
+        fail "tracks without their class's model: $(tail -1 out.jsonl)"
     # --frames stops early; --report keeps the latest frame's page.
     timeout 60 "$esf" live db.sqlite --recording rec/sequence_000 --frames 2 --report page \
         >out2.jsonl 2>err2.txt
