@@ -139,6 +139,8 @@ std::vector<MatchedView> matched_views(const SceneRecognition& scene, ViewRender
         try {
             const Classification& c = o.classification;
             out[i].points = views->render(c.class_name, c.best_model, c.pose);
+            // Verified: the pose places the model on the object, in the scene's camera frame.
+            out[i].posed = c.fit.has_value();
             if (out[i].points.empty()) out[i].note = "the view has no points";
         } catch (const std::exception& e) {
             out[i].note = e.what();

@@ -4,10 +4,12 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 #include "core/atomic_file.hpp"
 #include "core/convex_hull_2d.hpp"
@@ -66,8 +68,26 @@ const char* status_text(const RecognizedObject& o) {
     return to_string(o.cluster.status);
 }
 
+/// The convex hull of `points` projected into `frame` (empty when none projects).
+std::vector<Pixel> projected_hull(std::span<const Eigen::Vector3f> points,
+                                  const PointPicture& frame) {
+    std::vector<Pixel> pixels;
+    pixels.reserve(points.size());
+    for (const Eigen::Vector3f& p : points)
+        if (const auto uv = frame.projection.project(p))
+            pixels.push_back({std::lround(uv->x()), std::lround(uv->y())});
+    if (pixels.empty()) return {};
+    return convex_hull(pixels);
+}
+
+/// A polygon's points attribute.
+void svg_points(std::ostream& o, const std::vector<Pixel>& hull) {
+    for (std::size_t n = 0; n < hull.size(); ++n)
+        o << (n ? " " : "") << hull[n][0] << ',' << hull[n][1];
+}
+
 void frame_svg(std::ostream& o, const PointCloud& cloud, const SceneRecognition& scene,
-               const ScenePageOptions& options) {
+               std::span<const MatchedView> views, const ScenePageOptions& options) {
     std::vector<std::uint8_t> tints(cloud.points.size(), kTintGrey);
     if (scene.plane_found)
         for (std::size_t i = 0; i < cloud.points.size(); ++i) {
@@ -87,19 +107,23 @@ void frame_svg(std::ostream& o, const PointCloud& cloud, const SceneRecognition&
       << "\" href=\"" << png_data_uri(picture_png(frame)) << "\"/>\n";
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         const RecognizedObject& object = scene.objects[i];
-        std::vector<Pixel> pixels;
-        pixels.reserve(object.cluster.points.size());
-        for (const Eigen::Vector3f& p : object.cluster.points)
-            if (const auto uv = frame.projection.project(p))
-                pixels.push_back({std::lround(uv->x()), std::lround(uv->y())});
-        if (pixels.empty()) continue;
-        const std::vector<Pixel> hull = convex_hull(pixels);
+        const std::vector<Pixel> hull = projected_hull(object.cluster.points, frame);
+        if (hull.empty()) continue;
         const char* colour = kColours[i % kColours.size()];
+        if (i < views.size() && views[i].posed) {
+            const std::vector<Pixel> fitted = projected_hull(views[i].points, frame);
+            if (!fitted.empty()) {
+                o << "<polygon class=\"fit\" fill=\"none\" stroke=\"" << colour
+                  << "\" stroke-width=\"2\" stroke-dasharray=\"6,4\" points=\"";
+                svg_points(o, fitted);
+                o << "\"><title>" << xml_escape(object_label(i, object))
+                  << ": the fitted model</title></polygon>\n";
+            }
+        }
         o << "<g class=\"object\"><title>" << xml_escape(object_label(i, object))
           << "</title><polygon fill=\"" << colour << "\" fill-opacity=\"0.15\" stroke=\"" << colour
           << "\" stroke-width=\"2\" points=\"";
-        for (std::size_t n = 0; n < hull.size(); ++n)
-            o << (n ? " " : "") << hull[n][0] << ',' << hull[n][1];
+        svg_points(o, hull);
         long top = h, left = w;
         for (const Pixel& p : hull) {
             top = std::min(top, p[1]);
@@ -148,8 +172,9 @@ std::string scene_page_html(const std::string& file, const PointCloud& cloud,
       << kStyle << "</style>\n</head>\n<body>\n<p><a href=\"index.html\">all scenes</a></p>\n<h1>"
       << xml_escape(fs::path(file).filename().string()) << "</h1>\n<p>" << xml_escape(file) << ": "
       << xml_escape(scene.message) << ". The frame shaded by depth (near = dark), the "
-      << "table in green, each object outlined with its class and confidence.</p>\n";
-    frame_svg(o, cloud, scene, options);
+      << "table in green, each object outlined with its class and confidence (dashed: the "
+      << "model fitted to it, where verification ran).</p>\n";
+    frame_svg(o, cloud, scene, views, options);
     if (!scene.objects.empty())
         o << "<h2>Objects</h2>\n<table class=\"objects\">\n<tr><th>#</th><th>object and its "
              "nearest training view</th><th>class</th><th>confidence</th><th>model</th>"

@@ -106,6 +106,36 @@ TEST(ScenePage, OutlinesLieOnTheirObjectsSide) {
     for (double x : xs[1]) EXPECT_GT(x, 240.0);
 }
 
+TEST(ScenePage, AFittedModelIsOutlinedDashedOverItsObject) {
+    // Object 0's fitted model: a square a little larger than the object, at the same place.
+    const Fixture f;
+    std::vector<esf::MatchedView> views(2);
+    for (int j = -1; j <= 11; ++j)
+        for (int i = -1; i <= 11; ++i)
+            views[0].points.emplace_back(-0.3f + 0.01f * static_cast<float>(i),
+                                         0.01f * static_cast<float>(j), 1.8f);
+    views[0].posed = true;
+    views[1].points = {{0.0f, 0.0f, 1.0f}, {0.01f, 0.0f, 1.0f}, {0.0f, 0.01f, 1.0f}};
+    const std::string html = esf::scene_page_html("table.pcd", f.cloud, f.scene, views);
+    EXPECT_EQ(count(html, "<polygon"), 3u);  // two objects, one fitted model
+    EXPECT_EQ(count(html, "stroke-dasharray"), 1u);
+    EXPECT_NE(html.find("0 mug 0.75: the fitted model"), std::string::npos);
+    const std::size_t at = html.find("<polygon class=\"fit\"");
+    ASSERT_NE(at, std::string::npos);
+    const std::size_t from = html.find("points=\"", at) + 8, to = html.find('"', from);
+    std::istringstream points(html.substr(from, to - from));
+    std::string pair;
+    int corners = 0;
+    while (points >> pair) {
+        EXPECT_LT(std::stod(pair.substr(0, pair.find(','))), 240.0) << pair;  // left, as object 0
+        ++corners;
+    }
+    EXPECT_GE(corners, 3);
+    // Not posed (a training view in its own camera frame): no outline over the frame.
+    views[0].posed = false;
+    EXPECT_EQ(count(esf::scene_page_html("table.pcd", f.cloud, f.scene, views), "<polygon"), 2u);
+}
+
 TEST(ScenePage, IndexLinksPagesAndListsFailures) {
     std::vector<esf::ScenePageLink> links(2);
     links[0] = {"scene_000_a.html", "a.pcd", "1 object above the plane", {"mug"}, ""};

@@ -4,7 +4,8 @@
 //   the frame   the scene's points drawn as a depth-shaded picture (esf/point_picture.hpp), the
 //               table plane's points in green, each object outlined (the convex hull of its
 //               points in the picture) and labelled with its number, class and confidence as
-//               SVG text over the picture
+//               SVG text over the picture; where verification fitted a model to the object,
+//               the outline of the posed model's visible surface, dashed, in the same colour
 //   per object  its cluster drawn on its own next to the nearest training view of its class
 //               (the view's points, see esf/view_pictures.hpp), with model, view, distance,
 //               points, status and the next best classes of the vote
@@ -27,6 +28,9 @@ namespace esf {
 struct MatchedView {
     Points points;
     std::string note;
+    /// The points are the model fitted to the object (Classification::fit: the pose is the
+    /// model aligned to the points), in the scene's camera frame: the frame outlines them too.
+    bool posed = false;
 };
 
 struct ScenePageOptions {
