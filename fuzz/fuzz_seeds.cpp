@@ -71,7 +71,7 @@ void lzf_seeds(const fs::path& dir) {
         }
         std::vector<unsigned char> packed(esf::detail::lzf_compress_bound(raw.size()));
         packed.resize(esf::detail::lzf_compress(raw, packed));
-        for (const unsigned char flag : {0, 1}) {
+        for (const int flag : {0, 1}) {
             const auto size = static_cast<std::uint32_t>(raw.size());
             std::string seed(reinterpret_cast<const char*>(&size), sizeof size);
             seed.push_back(static_cast<char>(flag));
