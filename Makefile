@@ -79,7 +79,7 @@ FUZZ_CXX ?= clang++-16
 FUZZ_SECONDS ?= 60
 # libFuzzer's random seed: fixed, so that a run is repeatable (set another to explore further).
 FUZZ_SEED ?= 1
-FUZZ_TARGETS := pcd lzf ply_cloud xyz depth_png test_set catalog scene_set database mesh
+FUZZ_TARGETS := pcd lzf ply_cloud xyz depth_png test_set catalog scene_set database mesh kinect_recording
 FUZZ_FLAGS := -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer
 fuzz:
 	@scripts/install-deps.sh fuzz

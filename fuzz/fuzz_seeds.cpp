@@ -12,6 +12,8 @@
 
 #include "esf/io/cloud_io.hpp"
 #include "esf/io/depth_image.hpp"
+#include "esf/io/kinect_raw.hpp"
+#include "esf/io/kinect_recording.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "esf/training/database.hpp"
 #include "io/lzf.hpp"
@@ -69,7 +71,7 @@ void lzf_seeds(const fs::path& dir) {
         }
         std::vector<unsigned char> packed(esf::detail::lzf_compress_bound(raw.size()));
         packed.resize(esf::detail::lzf_compress(raw, packed));
-        for (const unsigned char flag : {0, 1}) {
+        for (const int flag : {0, 1}) {
             const auto size = static_cast<std::uint32_t>(raw.size());
             std::string seed(reinterpret_cast<const char*>(&size), sizeof size);
             seed.push_back(static_cast<char>(flag));
@@ -207,6 +209,37 @@ void mesh_seeds(const fs::path& dir) {
                std::string(1, '\3') + "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
 }
 
+// kinect_recording_fuzz: the first byte picks the reader (0 depth .pgm, 1 colour .ppm, 2
+// INDEX.txt; + 0x80: a frame's pixels are repeated to the whole frame), the rest is the file.
+// Frames are full 640 x 480 ones, as the readers require.
+void kinect_recording_seeds(const fs::path& dir) {
+    std::vector<std::uint16_t> depth(esf::kKinectFramePixels);
+    for (std::size_t i = 0; i < depth.size(); ++i)
+        depth[i] = static_cast<std::uint16_t>(i % (esf::kKinectRawNoReading + 1));  // 2047 too
+    std::ostringstream pgm;
+    esf::write_kinect_depth_pgm(pgm, depth);
+    write_file(dir / "depth.pgm.seed", std::string(1, '\0') + pgm.str());
+    std::vector<std::uint8_t> rgb(3 * esf::kKinectFramePixels);
+    for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<std::uint8_t>(i * 7);
+    std::ostringstream ppm;
+    esf::write_kinect_rgb_ppm(ppm, rgb);
+    write_file(dir / "rgb.ppm.seed", std::string(1, '\1') + ppm.str());
+    // Header lines with a few pixels, read whole (truncated) and repeated to a whole frame.
+    for (const int pad : {0x00, 0x80}) {
+        const std::string tag = pad ? "_header_repeated" : "_header";
+        write_file(dir / ("depth" + tag + ".pgm.seed"),
+                   std::string(1, static_cast<char>(pad)) + "P5 640 480 65535\n\xff\x07\x10\x01");
+        write_file(dir / ("rgb" + tag + ".ppm.seed"),
+                   std::string(1, static_cast<char>(pad | 1)) + "P6 640 480 255\n\x01\x02\x03");
+    }
+    write_file(dir / "index.txt.seed", std::string(1, '\2') +
+                                           "r-1294102395.455289-3420483396.ppm\n"
+                                           "d-1294102395.455601-3420483397.pgm\r\n"
+                                           "\n"
+                                           "a-1294102395.456000-0.dump\n"
+                                           "d-1294102395.488934-3420484397.pgm\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -224,6 +257,7 @@ int main(int argc, char** argv) {
         csv_seeds(root);
         database_seeds(root / "database");
         mesh_seeds(root / "mesh");
+        kinect_recording_seeds(root / "kinect_recording");
     } catch (const std::exception& e) {
         std::cerr << "esf_fuzz_seeds: " << e.what() << "\n";
         return 2;

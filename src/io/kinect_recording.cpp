@@ -72,6 +72,20 @@ std::ifstream open_regular(const std::string& path) {
     return in;
 }
 
+/// The next line of `in` without its newline, read one character at a time so that a line of
+/// any length costs no more than `limit` + 1 characters: a longer line is returned cut there (the
+/// caller refuses it). False at the end of the stream with nothing read.
+bool bounded_line(std::istream& in, std::string& line, std::size_t limit) {
+    line.clear();
+    for (;;) {
+        const int c = in.get();
+        if (c == std::char_traits<char>::eof()) return !line.empty();
+        if (c == '\n') return true;
+        line.push_back(static_cast<char>(c));
+        if (line.size() > limit) return true;
+    }
+}
+
 std::string entry_name(char type, double time, std::uint32_t timestamp) {
     char name[96];
     std::snprintf(name, sizeof name, "%c-%.6f-%u.%s", type, time, timestamp,
@@ -144,7 +158,8 @@ std::vector<KinectRecordingEntry> parse_kinect_recording_index(std::istream& in,
     std::vector<KinectRecordingEntry> entries;
     std::string line;
     std::size_t number = 0;
-    while (std::getline(in, line)) {
+    // kMaxLine + 1: a line of kMaxLine characters may end in "\r\n".
+    while (bounded_line(in, line, kMaxLine + 1)) {
         ++number;
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (line.empty()) continue;

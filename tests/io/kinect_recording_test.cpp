@@ -6,10 +6,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <streambuf>
 #include <string>
 #include <vector>
 
@@ -118,6 +121,49 @@ TEST(KinectRecording, IndexLinesAreParsedAndChecked) {
     EXPECT_CONTAINS(error("d-1.5-99999999999.pgm\n"), "TIMESTAMP out of range");
     EXPECT_CONTAINS(error("d-1.5-7\n"), "has no extension");
     EXPECT_CONTAINS(error(std::string(300, 'd')), "INDEX.txt:1: line longer than 255");
+}
+
+/// A stream of `size` copies of one character, counting how many of them were taken from it.
+class RepeatedCharBuf : public std::streambuf {
+  public:
+    RepeatedCharBuf(char c, std::size_t size) : left_(size) { chunk_.fill(c); }
+    std::size_t served() const { return served_; }
+
+  protected:
+    int_type underflow() override {
+        if (left_ == 0) return traits_type::eof();
+        const std::size_t n = std::min(left_, chunk_.size());
+        left_ -= n;
+        served_ += n;
+        setg(chunk_.data(), chunk_.data(), chunk_.data() + n);
+        return traits_type::to_int_type(chunk_[0]);
+    }
+
+  private:
+    std::array<char, 64> chunk_{};
+    std::size_t left_;
+    std::size_t served_ = 0;
+};
+
+TEST(KinectRecording, LongIndexLineIsRefusedWithoutReadingItWhole) {
+    // 64 MiB without a newline: the parser must stop soon after character 256, not hold the line.
+    RepeatedCharBuf buf('d', std::size_t{64} << 20);
+    std::istream in(&buf);
+    EXPECT_CONTAINS(esf::test::error_of<esf::IoError>(
+                        [&] { esf::parse_kinect_recording_index(in, "INDEX.txt"); }),
+                    "INDEX.txt:1: line longer than 255");
+    EXPECT_LE(buf.served(), 1024u);
+
+    // 255 characters and "\r\n" is the longest line accepted; 256 are one too many.
+    const std::string longest = "d-1.5-7.pgm" + std::string(255 - 11, 'x');
+    std::istringstream ok(longest + "\r\n" + longest + "\n" + longest);
+    const auto entries = esf::parse_kinect_recording_index(ok, "INDEX.txt");
+    ASSERT_EQ(entries.size(), 3u);
+    EXPECT_EQ(entries[2].file, longest);
+    std::istringstream over("d-1.0-1.pgm\n" + longest + "x\r\n");
+    EXPECT_CONTAINS(esf::test::error_of<esf::IoError>(
+                        [&] { esf::parse_kinect_recording_index(over, "INDEX.txt"); }),
+                    "INDEX.txt:2: line longer than 255");
 }
 
 TEST(KinectRecording, WrittenRecordingReadsBackFrameByFrame) {
