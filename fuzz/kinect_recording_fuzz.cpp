@@ -11,9 +11,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <istream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "esf/core/error.hpp"
@@ -40,14 +43,24 @@ std::string padded(std::string_view file, std::size_t body) {
     return out;
 }
 
-void depth(std::string_view file) {
+/// What `read` makes of `file`, or nothing when it throws esf::IoError (any other exception
+/// escapes: a crash for the fuzzer).
+template <class Read>
+auto read_or_nothing(std::string_view file, Read read)
+    -> std::optional<decltype(read(std::declval<std::istream&>()))> {
     std::istringstream in{std::string(file)};
-    std::vector<std::uint16_t> values;
     try {
-        values = esf::read_kinect_depth_pgm(in, "d.pgm");
+        return read(in);
     } catch (const esf::IoError&) {
-        return;
+        return std::nullopt;
     }
+}
+
+void depth(std::string_view file) {
+    const auto read = read_or_nothing(
+        file, [](std::istream& in) { return esf::read_kinect_depth_pgm(in, "d.pgm"); });
+    if (!read) return;
+    const std::vector<std::uint16_t>& values = *read;
     if (values.size() != esf::kKinectFramePixels) __builtin_trap();
     const std::string_view body = body_of(file);
     if (body.size() < 2 * values.size()) __builtin_trap();
@@ -60,13 +73,10 @@ void depth(std::string_view file) {
 }
 
 void rgb(std::string_view file) {
-    std::istringstream in{std::string(file)};
-    std::vector<std::uint8_t> bytes;
-    try {
-        bytes = esf::read_kinect_rgb_ppm(in, "r.ppm");
-    } catch (const esf::IoError&) {
-        return;
-    }
+    const auto read = read_or_nothing(
+        file, [](std::istream& in) { return esf::read_kinect_rgb_ppm(in, "r.ppm"); });
+    if (!read) return;
+    const std::vector<std::uint8_t>& bytes = *read;
     if (bytes.size() != 3 * esf::kKinectFramePixels) __builtin_trap();
     const std::string_view body = body_of(file);
     if (body.size() < bytes.size() || std::memcmp(body.data(), bytes.data(), bytes.size()) != 0)
@@ -74,13 +84,10 @@ void rgb(std::string_view file) {
 }
 
 void index(std::string_view file) {
-    std::istringstream in{std::string(file)};
-    std::vector<esf::KinectRecordingEntry> entries;
-    try {
-        entries = esf::parse_kinect_recording_index(in, "INDEX.txt");
-    } catch (const esf::IoError&) {
-        return;
-    }
+    const auto read = read_or_nothing(
+        file, [](std::istream& in) { return esf::parse_kinect_recording_index(in, "INDEX.txt"); });
+    if (!read) return;
+    const std::vector<esf::KinectRecordingEntry>& entries = *read;
     if (entries.size() > file.size()) __builtin_trap();
     for (const esf::KinectRecordingEntry& e : entries) {
         if (e.type != 'd' && e.type != 'r' && e.type != 'a') __builtin_trap();
