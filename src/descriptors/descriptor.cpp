@@ -130,10 +130,12 @@ EsfOptions fast_esf_options(const DescriptorOptions& options) {
     return out;
 }
 
-constexpr std::array<int, kSurfaceAngleBlocks + 1> kAngleBlockSizes = {
+/// The blocks esf-angles adds to ESF's: the six surface angle histograms, then the cylinder-box
+/// contrast, all from the same surface cells.
+constexpr std::array<int, kSurfaceAngleBlocks + 1> kSurfaceBlockSizes = {
     kSurfaceAngleBins,     kSurfaceAngleBins,     kSurfaceAngleBins, kSurfaceAngleBins,
     kSurfaceViewpointBins, kSurfaceVariationBins, kPrimitiveBins};
-constexpr std::array<const char*, kSurfaceAngleBlocks + 1> kAngleBlockNames = {
+constexpr std::array<const char*, kSurfaceAngleBlocks + 1> kSurfaceBlockNames = {
     "alpha", "phi", "theta", "s", "beta", "sigma", "cylinder-box"};
 
 /// What each baseline computes: known without loading the module.
@@ -184,7 +186,7 @@ DescriptorInfo registered_info(const std::string& name) {
                       "ESF (Wohlkinger & Vincze 2011) + view-relative surface angle histograms "
                       "(VFH's angles, Rusu et al. 2010), seeded",
                       kEsfVersion * 100 + kSurfaceAnglesVersion, 1),
-            kAngleBlockSizes, kAngleBlockNames);
+            kSurfaceBlockSizes, kSurfaceBlockNames);
         info.angles_weight = true;
         return info;
     }

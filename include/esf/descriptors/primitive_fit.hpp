@@ -27,11 +27,14 @@
 #include <cstdint>
 #include <span>
 
+#include "esf/descriptors/surface_angles.hpp"
+
 namespace esf {
 
 struct PrimitiveFitOptions {
-    double cell_size = 0.007;  ///< smallest cell side (metres), as the surface angles'
-    int iterations = 128;      ///< RANSAC hypotheses for the cylinder and for each box face
+    /// Smallest cell side (metres): the surface angles' cells.
+    double cell_size = SurfaceAngleOptions{}.cell_size;
+    int iterations = 128;  ///< RANSAC hypotheses for the cylinder and for each box face
     /// Cells scoring each hypothesis (evenly spaced); the chosen solid is scored on all cells.
     std::size_t scored_cells = 256;
     std::uint64_t seed = 0;
