@@ -12,6 +12,7 @@
 #include <limits>
 #include <memory>
 #include <nanoflann.hpp>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,9 +54,39 @@ class NearestPoints {
         tree_.knnSearch(q.data(), 1, &index, &squared);
         return index;
     }
+    // Index of the nearest point within sqrt(`radius_squared`), and the squared distance; false
+    // when there is none. The bound prunes the search: cheaper than nearest() and a test after.
+    bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t& index,
+                        float& squared) const {
+        NearestWithin result(std::nextafter(radius_squared, std::numeric_limits<float>::max()));
+        tree_.findNeighbors(result, q.data(), nanoflann::SearchParams());
+        if (!result.found) return false;
+        index = result.index;
+        squared = result.best;
+        return true;
+    }
     const Points& points() const { return points_; }
 
   private:
+    // nanoflann's result set for one neighbour, starting from a bound instead of infinity.
+    struct NearestWithin {
+        explicit NearestWithin(float bound) : best(bound) {}
+        float best;
+        std::size_t index = 0;
+        bool found = false;
+        std::size_t size() const { return found ? 1 : 0; }
+        bool full() const { return true; }
+        bool addPoint(float distance, std::size_t i) {
+            if (distance < best) {
+                best = distance;
+                index = i;
+                found = true;
+            }
+            return true;
+        }
+        float worstDist() const { return best; }
+    };
+
     Points points_;
     PointsAdaptor adaptor_;
     KdTree tree_;
@@ -88,6 +119,99 @@ Eigen::Matrix4d exp_se3(const Eigen::Matrix<double, 6, 1>& x) {
     m.topRightCorner<3, 1>() = x.tail<3>();
     return m;
 }
+
+// The pixel `p` (camera coordinates) falls on; false behind the camera or outside the image.
+bool project(const CameraIntrinsics& camera, const Eigen::Vector3d& p, long& u, long& v) {
+    if (!(p.z() > 1e-6)) return false;
+    u = std::lround(camera.fx * p.x() / p.z() + camera.cx);
+    v = std::lround(camera.fy * p.y() / p.z() + camera.cy);
+    return u >= 0 && v >= 0 && u < static_cast<long>(camera.width) &&
+           v < static_cast<long>(camera.height);
+}
+
+// The object's points by the pixel they fall on, for projective association (a model point is
+// paired with the object points seen near its own pixel): built only where the points are as
+// dense as a depth sensor's, every point in the image and most with a neighbouring pixel taken.
+// Elsewhere (a cloud thinned out, or not in camera coordinates) usable() is false and the k-d
+// tree pairs the points.
+class ObjectPixels {
+  public:
+    ObjectPixels(std::span<const Eigen::Vector3f> points, const CameraIntrinsics& camera)
+        : camera_(camera), points_(points) {
+        std::vector<std::pair<long, long>> pixels;
+        pixels.reserve(points.size());
+        long u_min = camera.width, v_min = camera.height, u_max = -1, v_max = -1;
+        for (const Eigen::Vector3f& p : points) {
+            long u = 0, v = 0;
+            if (!project(camera, p.cast<double>(), u, v)) return;
+            pixels.emplace_back(u, v);
+            u_min = std::min(u_min, u);
+            v_min = std::min(v_min, v);
+            u_max = std::max(u_max, u);
+            v_max = std::max(v_max, v);
+        }
+        if (pixels.empty()) return;
+        u0_ = u_min;
+        v0_ = v_min;
+        width_ = u_max - u_min + 1;
+        height_ = v_max - v_min + 1;
+        index_.assign(static_cast<std::size_t>(width_ * height_), -1);
+        for (std::size_t i = 0; i < pixels.size(); ++i) {
+            std::int32_t& slot = index_[cell(pixels[i].first, pixels[i].second)];
+            // The nearest point of a pixel stands for it.
+            if (slot < 0 || points[i].z() < points[static_cast<std::size_t>(slot)].z())
+                slot = static_cast<std::int32_t>(i);
+        }
+        std::size_t taken = 0, neighboured = 0;
+        for (long v = 0; v < height_; ++v)
+            for (long u = 0; u < width_; ++u) {
+                if (index_[static_cast<std::size_t>(v * width_ + u)] < 0) continue;
+                ++taken;
+                neighboured +=
+                    (u > 0 && index_[static_cast<std::size_t>(v * width_ + u - 1)] >= 0) ||
+                    (u + 1 < width_ && index_[static_cast<std::size_t>(v * width_ + u + 1)] >= 0) ||
+                    (v > 0 && index_[static_cast<std::size_t>((v - 1) * width_ + u)] >= 0) ||
+                    (v + 1 < height_ &&
+                     index_[static_cast<std::size_t>((v + 1) * width_ + u)] >= 0);
+            }
+        if (10 * neighboured < 8 * taken) index_.clear();
+    }
+
+    bool usable() const { return !index_.empty(); }
+
+    // The object point nearest to `p` among those within `window` pixels of its pixel, and the
+    // squared distance; false when there is none.
+    bool nearest(const Eigen::Vector3d& p, long window, Eigen::Vector3d& found,
+                 double& squared) const {
+        long u = 0, v = 0;
+        if (!project(camera_, p, u, v)) return false;
+        squared = std::numeric_limits<double>::infinity();
+        for (long vv = std::max(v - window, v0_); vv <= std::min(v + window, v0_ + height_ - 1);
+             ++vv)
+            for (long uu = std::max(u - window, u0_); uu <= std::min(u + window, u0_ + width_ - 1);
+                 ++uu) {
+                const std::int32_t i = index_[cell(uu, vv)];
+                if (i < 0) continue;
+                const Eigen::Vector3d q = points_[static_cast<std::size_t>(i)].cast<double>();
+                const double d = (q - p).squaredNorm();
+                if (d < squared) {
+                    squared = d;
+                    found = q;
+                }
+            }
+        return std::isfinite(squared);
+    }
+
+  private:
+    std::size_t cell(long u, long v) const {
+        return static_cast<std::size_t>((v - v0_) * width_ + (u - u0_));
+    }
+
+    CameraIntrinsics camera_;
+    std::span<const Eigen::Vector3f> points_;
+    long u0_ = 0, v0_ = 0, width_ = 0, height_ = 0;
+    std::vector<std::int32_t> index_;  // point per pixel of the bounding box, -1: none
+};
 
 // Where the sensor looked: the frame's depth per pixel, or the object's own outline.
 class SeenSpace {
@@ -139,10 +263,7 @@ class SeenSpace {
     static constexpr long kSlack = 2;
 
     bool project(const Eigen::Vector3d& p, long& u, long& v) const {
-        if (!(p.z() > 1e-6)) return false;
-        u = std::lround(camera_.fx * p.x() / p.z() + camera_.cx);
-        v = std::lround(camera_.fy * p.y() / p.z() + camera_.cy);
-        return u >= 0 && v >= 0 && u < static_cast<long>(width_) && v < static_cast<long>(height_);
+        return esf::project(camera_, p, u, v);
     }
 
     CameraIntrinsics camera_;
@@ -153,6 +274,7 @@ class SeenSpace {
 
 constexpr std::size_t kIcpSamples = 200;      // visible surface samples per ICP iteration
 constexpr std::size_t kObjectSamples = 1000;  // object points in the k-d tree and the score
+constexpr long kSupportWindow = 2;            // pixels searched for a model point's support
 constexpr double kPointWeight = 0.1;          // of the point-to-point term in ICP
 constexpr double kMinScale = 0.8;             // bounds of a free scale, relative to the model's
 constexpr double kMaxScale = 1.25;
@@ -230,11 +352,14 @@ ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t co
 
 struct PreparedObservation::Impl {
     Impl(const Observation& observation, const CameraIntrinsics& camera)
-        : object(stride_sample(observation.points, kObjectSamples)), seen(observation, camera) {
+        : object(stride_sample(observation.points, kObjectSamples)),
+          pixels(observation.points, camera),
+          seen(observation, camera) {
         for (const Eigen::Vector3f& p : object.points()) centroid += p.cast<double>();
         centroid /= static_cast<double>(object.points().size());
     }
     NearestPoints object;
+    ObjectPixels pixels;
     SeenSpace seen;
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
 };
@@ -268,13 +393,36 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                      free_scale);
 }
 
+struct PreparedModel::Impl {
+    explicit Impl(ModelSurface s) : surface(std::move(s)), tree(surface.points) {}
+    ModelSurface surface;
+    NearestPoints tree;  // the surface's points, model frame
+};
+
+PreparedModel::PreparedModel(ModelSurface surface) {
+    if (surface.points.empty() || surface.points.size() != surface.normals.size())
+        throw std::invalid_argument("verification: empty model surface");
+    impl_ = std::make_unique<Impl>(std::move(surface));
+}
+
+PreparedModel::~PreparedModel() = default;
+PreparedModel::PreparedModel(PreparedModel&&) noexcept = default;
+PreparedModel& PreparedModel::operator=(PreparedModel&&) noexcept = default;
+const ModelSurface& PreparedModel::surface() const { return impl_->surface; }
+
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& prepared, const VerificationOptions& options,
                   bool free_scale) {
     validate(options);
+    return fit_model(PreparedModel(surface), view_pose, prepared, options, free_scale);
+}
+
+PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
+                  const PreparedObservation& prepared, const VerificationOptions& options,
+                  bool free_scale) {
+    validate(options);
     if (!view_pose.allFinite()) throw std::invalid_argument("verification: pose is not finite");
-    if (surface.points.empty() || surface.points.size() != surface.normals.size())
-        throw std::invalid_argument("verification: empty model surface");
+    const ModelSurface& surface = model.impl_->surface;
     const NearestPoints& object = prepared.impl_->object;
     const Eigen::Vector3d& centroid = prepared.impl_->centroid;
 
@@ -321,6 +469,19 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
         }
     };
 
+    // The object point nearest to a model point, within `radius` (the k-d tree). ICP pairs
+    // points so: projective association (a point with the object points seen at its pixel) cost
+    // accuracy on the real views and the pose benchmark (BENCHMARKS.md).
+    const auto pair = [&](const Eigen::Vector3d& p, Eigen::Vector3d& target, double radius) {
+        std::size_t index = 0;
+        float squared_float = 0.0f;
+        if (!object.nearest_within(p.cast<float>(), static_cast<float>(radius * radius), index,
+                                   squared_float))
+            return false;
+        target = object.points()[index].cast<double>();
+        return true;
+    };
+
     std::vector<Eigen::Vector3d> points, normals;
     double scale = 1.0;  // relative to the surface's
     for (int iteration = 0; iteration < options.iterations; ++iteration) {
@@ -341,10 +502,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
         std::size_t pairs = 0;
         const std::size_t step = std::max<std::size_t>(1, points.size() / kIcpSamples);
         for (std::size_t i = 0; i < points.size(); i += step) {
-            float squared = 0.0f;
-            const std::size_t q = object.nearest(points[i].cast<float>(), squared);
-            if (static_cast<double>(squared) > radius * radius) continue;
-            const Eigen::Vector3d target = object.points()[q].cast<double>();
+            Eigen::Vector3d target;
+            if (!pair(points[i], target, radius)) continue;
             const Eigen::Vector3d arm = points[i] - pivot;
             Eigen::Matrix<double, 7, 1> row;
             row.head<3>() = arm.cross(normals[i]);
@@ -388,29 +547,28 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
     out.model_to_camera = pose;
     out.scale = scale;
     visible_samples(pose, 1, points, normals);
-    std::vector<Eigen::Vector3d> all_normals;
     {
-        const Eigen::Matrix3d r = pose.topLeftCorner<3, 3>();
+        // The object's points taken into the model's frame, where its k-d tree was built once:
+        // the pose is scale times a rotation, so distances shrink by the scale there.
+        const Eigen::Matrix3d rotation_t = pose.topLeftCorner<3, 3>().transpose() / scale;
         const Eigen::Vector3d t = pose.topRightCorner<3, 1>();
-        Points posed;
-        posed.reserve(surface.points.size());
-        for (std::size_t i = 0; i < surface.points.size(); ++i) {
-            posed.push_back((r * surface.points[i].cast<double>() + t).cast<float>());
-            all_normals.push_back((r * surface.normals[i].cast<double>()).normalized());
-        }
-        const NearestPoints model(std::move(posed));
+        const NearestPoints& tree = model.impl_->tree;
         // A sample stands for a patch of about this radius.
         const double spacing =
             surface.diameter / std::sqrt(static_cast<double>(surface.points.size())) * 1.5;
         std::size_t inliers = 0;
         double squared_sum = 0.0;
         for (const Eigen::Vector3f& q : object.points()) {
+            const Eigen::Vector3d local = rotation_t * (q.cast<double>() - t) / scale;
             float squared = 0.0f;
-            const std::size_t m = model.nearest(q, squared);
-            const Eigen::Vector3d d = (q - model.points()[m]).cast<double>();
-            const double along = std::abs(d.dot(all_normals[m]));
-            if (std::sqrt(static_cast<double>(squared)) < spacing + options.inlier_distance &&
-                along < options.inlier_distance) {
+            std::size_t m = 0;
+            const double reach = (spacing + options.inlier_distance) / scale;
+            if (!tree.nearest_within(local.cast<float>(), static_cast<float>(reach * reach), m,
+                                     squared))
+                continue;
+            const Eigen::Vector3d d = local - surface.points[m].cast<double>();
+            const double along = scale * std::abs(d.dot(surface.normals[m].cast<double>()));
+            if (along < options.inlier_distance) {
                 ++inliers;
                 squared_sum += along * along;
             }
@@ -423,6 +581,7 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
     // Violations, and support: the share of the visible surface (not hidden by something
     // nearer) that has an object point on it.
     const SeenSpace& seen = prepared.impl_->seen;
+    const ObjectPixels& pixels = prepared.impl_->pixels;
     std::size_t decided = 0, violations = 0, exposed = 0, supported = 0;
     const double object_spacing = 0.01;
     for (std::size_t i = 0; i < points.size(); ++i) {
@@ -434,12 +593,15 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
         }
         if (seen.hidden(p, options.violation_margin)) continue;
         ++exposed;
-        float squared = 0.0f;
-        const std::size_t q = object.nearest(p.cast<float>(), squared);
-        const Eigen::Vector3d d = object.points()[q].cast<double>() - p;
-        if (std::sqrt(static_cast<double>(squared)) < object_spacing + options.inlier_distance &&
-            std::abs(d.dot(normals[i])) < options.inlier_distance)
-            ++supported;
+        // Projective where the object's points are a sensor's (those seen near the model
+        // point's pixel), else the k-d tree of the object's samples.
+        const double reach = object_spacing + options.inlier_distance;
+        Eigen::Vector3d q;
+        double squared = 0.0;
+        const bool near = pixels.usable() ? pixels.nearest(p, kSupportWindow, q, squared) &&
+                                                squared <= reach * reach
+                                          : pair(p, q, reach);
+        if (near && std::abs((q - p).dot(normals[i])) < options.inlier_distance) ++supported;
     }
     out.fit.violations =
         decided ? static_cast<double>(violations) / static_cast<double>(decided) : 0.0;

@@ -134,11 +134,11 @@ struct Recognizer::Impl {
     std::unique_ptr<Classifier> classifier;
     std::size_t dimension = 0;
     std::vector<ModelInfo> models;  // by model id (DescriptorMatrix::models)
-    // Verification: each model's sampled surface, loaded on first use.
+    // Verification: each model's sampled surface and its k-d tree, loaded on first use.
     mutable std::mutex surfaces_mutex;
-    mutable std::map<int, std::shared_ptr<const ModelSurface>> surfaces;
+    mutable std::map<int, std::shared_ptr<const PreparedModel>> surfaces;
 
-    std::shared_ptr<const ModelSurface> surface(int model_id) const {
+    std::shared_ptr<const PreparedModel> surface(int model_id) const {
         const std::lock_guard<std::mutex> lock(surfaces_mutex);
         const auto it = surfaces.find(model_id);
         if (it != surfaces.end()) return it->second;
@@ -146,7 +146,7 @@ struct Recognizer::Impl {
         const std::string path =
             (std::filesystem::path(options.verification_meshes) / m.file).string();
         const Mesh mesh = load_mesh(path);
-        auto surface = std::make_shared<const ModelSurface>(sample_model_surface(
+        auto surface = std::make_shared<const PreparedModel>(sample_model_surface(
             mesh, m.scale, options.verification.surface_points, model_seed(0, m.category, m.name)));
         surfaces.emplace(model_id, surface);
         return surface;

@@ -85,6 +85,34 @@ TEST(FitModel, RecoversThePoseFromAPerturbedView) {
     EXPECT_EQ(fit.scale, 1.0);
 }
 
+TEST(FitModel, APreparedModelFitsAsItsSurfaceDoesAndAThinnedCloudIsStillSupported) {
+    const esf::Mesh box = esf::test::standing_box(0.16, 0.08, 0.22);
+    const Eigen::Isometry3d truth = standing_pose(25.0);
+    const esf::Points seen = render(box, truth);
+    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
+    view.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()).toRotationMatrix() * truth.linear();
+    esf::ModelSurface surface = esf::sample_model_surface(box, 1.0, 3000, 1);
+    const esf::PoseFit plain = esf::fit_model(surface, view, {seen, nullptr}, {});
+    const esf::PreparedModel model(surface);
+    const esf::VerificationOptions options;
+    const esf::PreparedObservation observation({seen, nullptr}, options.camera);
+    const esf::PoseFit prepared = esf::fit_model(model, view, observation, options);
+    EXPECT_EQ(prepared.model_to_camera, plain.model_to_camera);
+    EXPECT_EQ(prepared.fit.inliers, plain.fit.inliers);
+    EXPECT_EQ(prepared.fit.support, plain.fit.support);
+    // Every fifth point: too sparse to look the support up by pixel, the k-d tree finds it.
+    esf::Points thinned;
+    for (std::size_t i = 0; i < seen.size(); i += 5) thinned.push_back(seen[i]);
+    const esf::PoseFit sparse = esf::fit_model(
+        model, view, esf::PreparedObservation({thinned, nullptr}, options.camera), options);
+    EXPECT_GT(sparse.fit.support, 0.9);
+    EXPECT_GT(sparse.fit.inliers, 0.95);
+    surface.normals.pop_back();
+    EXPECT_THROW(esf::PreparedModel{surface}, std::invalid_argument);
+    EXPECT_THROW(esf::PreparedModel{esf::ModelSurface{}}, std::invalid_argument);
+}
+
 TEST(FitModel, TheRightShapeScoresAboveABoxOfItsSize) {
     const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
     const esf::Mesh box = esf::test::standing_box(0.08, 0.08, 0.12);

@@ -6,9 +6,11 @@
 //   align   point-to-plane ICP (the model's normals) of the model's camera-facing surface samples
 //           to their nearest object points (a k-d tree, nanoflann), correspondences within a
 //           radius shrinking from 3 to 1 cm
-//   score   inliers: share of the object's points within `inlier_distance` of the posed surface;
+//   score   inliers: share of the object's points within `inlier_distance` of the posed surface
+//           (the model's k-d tree, built once per model: PreparedModel);
 //           support: share of the posed model's visible surface (not hidden by nearer returns)
-//           with object points on it;
+//           with object points on it (looked up by pixel where the object's points are as dense
+//           as a depth sensor's, by the k-d tree otherwise);
 //           violations: share of the posed visible surface where the sensor sees free space:
 //           with the frame, a return farther than the model by `violation_margin` at the pixel a
 //           model point projects to; without a frame (a lone cloud), a pixel outside the object's
@@ -88,6 +90,8 @@ struct PoseFit {
     bool verified = false;
 };
 
+class PreparedModel;
+
 /// An observation made ready for several hypotheses: its k-d tree and what the sensor saw
 /// (the frame, or the object's outline) are built once. The observation's points and frame
 /// must outlive it. Throws std::invalid_argument for fewer than 3 points or a frame that is not
@@ -100,7 +104,25 @@ class PreparedObservation {
     PreparedObservation& operator=(PreparedObservation&&) noexcept;
 
   private:
-    friend PoseFit fit_model(const ModelSurface&, const Eigen::Matrix4d&,
+    friend PoseFit fit_model(const PreparedModel&, const Eigen::Matrix4d&,
+                             const PreparedObservation&, const VerificationOptions&, bool);
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/// A model's surface made ready for several hypotheses: its k-d tree (model frame) is built
+/// once. Throws std::invalid_argument for an empty surface or one whose normals do not match its
+/// points.
+class PreparedModel {
+  public:
+    explicit PreparedModel(ModelSurface surface);
+    ~PreparedModel();
+    PreparedModel(PreparedModel&&) noexcept;
+    PreparedModel& operator=(PreparedModel&&) noexcept;
+    const ModelSurface& surface() const;
+
+  private:
+    friend PoseFit fit_model(const PreparedModel&, const Eigen::Matrix4d&,
                              const PreparedObservation&, const VerificationOptions&, bool);
     struct Impl;
     std::unique_ptr<Impl> impl_;
@@ -116,6 +138,10 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   bool free_scale = false);
 /// The same against a prepared observation (prepared with options.camera).
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
+                  const PreparedObservation& observation, const VerificationOptions& options,
+                  bool free_scale = false);
+/// The same with a prepared model: what a recognizer uses for many objects.
+PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& observation, const VerificationOptions& options,
                   bool free_scale = false);
 
