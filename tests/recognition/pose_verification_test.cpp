@@ -85,7 +85,7 @@ TEST(FitModel, RecoversThePoseFromAPerturbedView) {
     EXPECT_EQ(fit.scale, 1.0);
 }
 
-TEST(FitModel, APreparedModelFitsAsItsSurfaceDoesAndAThinnedCloudIsStillSupported) {
+TEST(FitModel, APreparedModelFitsAsItsSurfaceDoesAndAThinnedCloudStillSupportsIt) {
     const esf::Mesh box = esf::test::standing_box(0.16, 0.08, 0.22);
     const Eigen::Isometry3d truth = standing_pose(25.0);
     const esf::Points seen = render(box, truth);
@@ -101,7 +101,7 @@ TEST(FitModel, APreparedModelFitsAsItsSurfaceDoesAndAThinnedCloudIsStillSupporte
     EXPECT_EQ(prepared.model_to_camera, plain.model_to_camera);
     EXPECT_EQ(prepared.fit.inliers, plain.fit.inliers);
     EXPECT_EQ(prepared.fit.support, plain.fit.support);
-    // Every fifth point: too sparse to look the support up by pixel, the k-d tree finds it.
+    // Every fifth point: a thinned cloud still supports the whole visible surface.
     esf::Points thinned;
     for (std::size_t i = 0; i < seen.size(); i += 5) thinned.push_back(seen[i]);
     const esf::PoseFit sparse = esf::fit_model(

@@ -9,8 +9,7 @@
 //   score   inliers: share of the object's points within `inlier_distance` of the posed surface
 //           (the model's k-d tree, built once per model: PreparedModel);
 //           support: share of the posed model's visible surface (not hidden by nearer returns)
-//           with object points on it (looked up by pixel where the object's points are as dense
-//           as a depth sensor's, by the k-d tree otherwise);
+//           with object points on it;
 //           violations: share of the posed visible surface where the sensor sees free space:
 //           with the frame, a return farther than the model by `violation_margin` at the pixel a
 //           model point projects to; without a frame (a lone cloud), a pixel outside the object's
