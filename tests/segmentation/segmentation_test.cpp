@@ -142,7 +142,8 @@ const esf::Cluster* cluster_near(const esf::SegmentationResult& result, const Ve
 TEST(Segmentation, ThreeObjectsOnATable) {
     std::vector<Expected> expected;
     const Scene scene = three_object_scene(expected);
-    const esf::SegmentationResult result = esf::segment_scene(scene.points, scene_options());
+    const esf::SegmentationOptions options = scene_options();
+    const esf::SegmentationResult result = esf::segment_scene(scene.points, options);
     ASSERT_TRUE(result.plane_found) << result.message;
     EXPECT_EQ(result.message, "3 objects above the plane");
     EXPECT_NEAR(result.plane.normal.z(), 1.0f, 1e-4f);  // towards the viewpoint: +z
@@ -159,10 +160,10 @@ TEST(Segmentation, ThreeObjectsOnATable) {
         SCOPED_TRACE("object " + std::to_string(id));
         const esf::Cluster* cluster = cluster_near(result, expected[id].centroid);
         ASSERT_NE(cluster, nullptr);
-        // Every point of the object above min_height (1 cm) and nothing else.
+        // Every point of the object above min_height and nothing else.
         std::size_t object_points = 0;
         for (std::size_t i = 0; i < scene.points.size(); ++i)
-            if (scene.owner[i] == static_cast<int>(id) && scene.points[i].z() > 0.01f)
+            if (scene.owner[i] == static_cast<int>(id) && scene.points[i].z() > options.min_height)
                 ++object_points;
         EXPECT_EQ(cluster->points.size(), object_points);
         ASSERT_EQ(cluster->indices.size(), cluster->points.size());
@@ -369,8 +370,8 @@ TEST(Segmentation, NoPlaneNoObjects) {
     EXPECT_TRUE(empty_table.plane_found);
     EXPECT_TRUE(empty_table.clusters.empty());
     EXPECT_EQ(empty_table.message,
-              "no objects above the plane: no points between 0.01 m and 0.4 m above it inside its "
-              "hull");
+              "no objects above the plane: no points between 0.0075 m and 0.4 m above it inside "
+              "its hull");
 
     // Crumbs: a few points above the table, too few for a cluster.
     bare.add({0.1f, 0.1f, 0.03f}, 0);
