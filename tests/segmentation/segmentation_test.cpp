@@ -148,8 +148,9 @@ TEST(Segmentation, ThreeObjectsOnATable) {
     EXPECT_EQ(result.message, "3 objects above the plane");
     EXPECT_NEAR(result.plane.normal.z(), 1.0f, 1e-4f);  // towards the viewpoint: +z
     EXPECT_NEAR(result.plane.d, 0.0f, 5e-4f);
-    std::size_t near_plane = 0;  // the table and the bottom centimetre of the objects
-    for (const Vector3f& p : scene.points) near_plane += std::abs(p.z()) <= 0.01f ? 1 : 0;
+    std::size_t near_plane = 0;  // the table and the objects' lowest millimetres
+    for (const Vector3f& p : scene.points)
+        near_plane += std::abs(p.z()) <= options.plane_distance ? 1 : 0;
     EXPECT_EQ(result.plane_inliers, near_plane);
     EXPECT_EQ(result.finite_points, scene.points.size());
     ASSERT_EQ(result.clusters.size(), 3u);

@@ -68,7 +68,9 @@ struct EnumNames<Grouping> {
 /// 0.5 to 2 m; scale them for clouds in other units).
 struct SegmentationOptions {
     // Plane fit.
-    float plane_distance = 0.01f;       ///< m; max distance of a table point to the plane (RANSAC)
+    /// m; max distance of a table point to the plane (RANSAC): the same margin as min_height
+    /// (chosen with it, BENCHMARKS.md)
+    float plane_distance = 0.0075f;
     int plane_iterations = 500;         ///< max RANSAC hypotheses (fewer when the plane is clear)
     std::size_t plane_samples = 12000;  ///< points the plane is fitted on (subsample), >= 3
     double plane_confidence = 0.999;    ///< RANSAC stops when a better plane is this unlikely
