@@ -25,17 +25,35 @@ constexpr std::size_t kMaxLine = 255;
 const char* const kDepthHeader = "P5 640 480 65535";
 const char* const kRgbHeader = "P6 640 480 255";
 
+/// How read_line stopped.
+enum class LineEnd { kNewline, kStreamEnd, kTooLong };
+
+/// The next line of `in` into `line`, without its newline, read one character at a time so that
+/// a line of any length costs no more than `limit` + 1 characters: kTooLong when more than
+/// `limit` come before a newline (`line` then holds `limit` + 1 of them).
+LineEnd read_line(std::istream& in, std::string& line, std::size_t limit) {
+    line.clear();
+    for (;;) {
+        const int c = in.get();
+        if (c == std::char_traits<char>::eof()) return LineEnd::kStreamEnd;
+        if (c == '\n') return LineEnd::kNewline;
+        line.push_back(static_cast<char>(c));
+        if (line.size() > limit) return LineEnd::kTooLong;
+    }
+}
+
 /// The first line of a frame file (without its newline); fakenect skips exactly this line.
 std::string header_line(std::istream& in, const std::string& name) {
     std::string line;
-    for (std::size_t n = 0; n <= 64; ++n) {
-        const int c = in.get();
-        if (c == std::char_traits<char>::eof())
+    switch (read_line(in, line, 64)) {
+        case LineEnd::kNewline:
+            return line;
+        case LineEnd::kStreamEnd:
             throw IoError(file_message(name, 0,
                                        "no header line (expected a line ending in a "
                                        "newline before the pixels)"));
-        if (c == '\n') return line;
-        line.push_back(static_cast<char>(c));
+        case LineEnd::kTooLong:
+            break;
     }
     throw IoError(file_message(name, 0, "header line longer than 64 characters"));
 }
@@ -70,20 +88,6 @@ std::ifstream open_regular(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError(file_message(path, 0, "cannot be opened"));
     return in;
-}
-
-/// The next line of `in` without its newline, read one character at a time so that a line of
-/// any length costs no more than `limit` + 1 characters: a longer line is returned cut there (the
-/// caller refuses it). False at the end of the stream with nothing read.
-bool bounded_line(std::istream& in, std::string& line, std::size_t limit) {
-    line.clear();
-    for (;;) {
-        const int c = in.get();
-        if (c == std::char_traits<char>::eof()) return !line.empty();
-        if (c == '\n') return true;
-        line.push_back(static_cast<char>(c));
-        if (line.size() > limit) return true;
-    }
 }
 
 std::string entry_name(char type, double time, std::uint32_t timestamp) {
@@ -159,7 +163,7 @@ std::vector<KinectRecordingEntry> parse_kinect_recording_index(std::istream& in,
     std::string line;
     std::size_t number = 0;
     // kMaxLine + 1: a line of kMaxLine characters may end in "\r\n".
-    while (bounded_line(in, line, kMaxLine + 1)) {
+    while (read_line(in, line, kMaxLine + 1) != LineEnd::kStreamEnd || !line.empty()) {
         ++number;
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (line.empty()) continue;

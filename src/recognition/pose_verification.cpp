@@ -48,14 +48,9 @@ class NearestPoints {
           tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {
         tree_.buildIndex();
     }
-    // Index of the nearest point and the squared distance.
-    std::size_t nearest(const Eigen::Vector3f& q, float& squared) const {
-        std::size_t index = 0;
-        tree_.knnSearch(q.data(), 1, &index, &squared);
-        return index;
-    }
     // Index of the nearest point within sqrt(`radius_squared`), and the squared distance; false
-    // when there is none. The bound prunes the search: cheaper than nearest() and a test after.
+    // when there is none. The bound prunes the search: cheaper than the nearest point and a
+    // test after.
     bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t& index,
                         float& squared) const {
         NearestWithin result(std::nextafter(radius_squared, std::numeric_limits<float>::max()));
@@ -120,15 +115,6 @@ Eigen::Matrix4d exp_se3(const Eigen::Matrix<double, 6, 1>& x) {
     return m;
 }
 
-// The pixel `p` (camera coordinates) falls on; false behind the camera or outside the image.
-bool project(const CameraIntrinsics& camera, const Eigen::Vector3d& p, long& u, long& v) {
-    if (!(p.z() > 1e-6)) return false;
-    u = std::lround(camera.fx * p.x() / p.z() + camera.cx);
-    v = std::lround(camera.fy * p.y() / p.z() + camera.cy);
-    return u >= 0 && v >= 0 && u < static_cast<long>(camera.width) &&
-           v < static_cast<long>(camera.height);
-}
-
 // Where the sensor looked: the frame's depth per pixel, or the object's own outline.
 class SeenSpace {
   public:
@@ -179,7 +165,10 @@ class SeenSpace {
     static constexpr long kSlack = 2;
 
     bool project(const Eigen::Vector3d& p, long& u, long& v) const {
-        return esf::project(camera_, p, u, v);
+        if (!(p.z() > 1e-6)) return false;
+        u = std::lround(camera_.fx * p.x() / p.z() + camera_.cx);
+        v = std::lround(camera_.fy * p.y() / p.z() + camera_.cy);
+        return u >= 0 && v >= 0 && u < static_cast<long>(width_) && v < static_cast<long>(height_);
     }
 
     CameraIntrinsics camera_;
@@ -325,7 +314,6 @@ const ModelSurface& PreparedModel::surface() const { return impl_->surface; }
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& prepared, const VerificationOptions& options,
                   bool free_scale) {
-    validate(options);
     return fit_model(PreparedModel(surface), view_pose, prepared, options, free_scale);
 }
 
@@ -468,13 +456,13 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         // A sample stands for a patch of about this radius.
         const double spacing =
             surface.diameter / std::sqrt(static_cast<double>(surface.points.size())) * 1.5;
+        const double reach = (spacing + options.inlier_distance) / scale;
         std::size_t inliers = 0;
         double squared_sum = 0.0;
         for (const Eigen::Vector3f& q : object.points()) {
             const Eigen::Vector3d local = rotation_t * (q.cast<double>() - t) / scale;
             float squared = 0.0f;
             std::size_t m = 0;
-            const double reach = (spacing + options.inlier_distance) / scale;
             if (!tree.nearest_within(local.cast<float>(), static_cast<float>(reach * reach), m,
                                      squared))
                 continue;
