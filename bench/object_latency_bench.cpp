@@ -32,7 +32,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::unique_ptr<esf::Recognizer> g_recognizer;
-std::unique_ptr<esf::Recognizer> g_verifier;  // the same database, with --verify
+std::unique_ptr<esf::Recognizer> g_verifier;  // the same database, verifying
 std::vector<esf::Classification> g_classes;
 std::vector<esf::Points> g_clouds;
 std::vector<esf::QueryDescriptor> g_descriptors;
@@ -122,11 +122,16 @@ int main(int argc, char** argv) {
         }
         esf::RecognizerOptions options;
         options.threads = 1;
+        options.verify = false;
         g_recognizer = std::make_unique<esf::Recognizer>(db_path, options);
         for (const esf::TestSample& s : esf::read_test_set(labels.string()).samples)
             g_clouds.push_back(esf::read_cloud(s.file).points);
-        options.verification_meshes = (data / "meshes").string();
+        options.verify = true;  // with the stored surfaces; the meshes for an older database
         g_verifier = std::make_unique<esf::Recognizer>(db_path, options);
+        if (!g_verifier->verifies()) {
+            options.verification_meshes = (data / "meshes").string();
+            g_verifier = std::make_unique<esf::Recognizer>(db_path, options);
+        }
         for (esf::Points& cloud : g_clouds) cloud = esf::drop_non_finite(cloud).points;
         for (const esf::Points& cloud : g_clouds) {
             g_descriptors.push_back(g_recognizer->describe(cloud));

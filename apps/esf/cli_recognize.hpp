@@ -21,19 +21,23 @@ struct RecognizerArgs {
     bool every_view = false;
 };
 
-/// --verify ROOT and --candidates N: hypothesis verification with the training meshes.
+/// --no-verify, --verify-meshes ROOT, --candidates N, --verify-within-class: hypothesis
+/// verification (on by default, with the surfaces the database stores).
 inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
-    cmd.add_option("--verify", options.verification_meshes,
-                   "Verify: align the meshes of the nearest models (ROOT: the folder DB was "
-                   "trained from) to the points; the best fit names model and 6-DoF pose, with "
-                   "its fit (inliers, violations, RMS)")
+    cmd.add_flag("!--no-verify", options.verify,
+                 "k-NN only: do not align the nearest models to the points (default: the best "
+                 "fit of the nearest models names class, model and 6-DoF pose, with its fit)");
+    cmd.add_option("--verify-meshes", options.verification_meshes,
+                   "Verify with the meshes of ROOT (the folder DB was trained from), for a "
+                   "database trained before esf stored the models' surfaces")
         ->check(CLI::ExistingDirectory);
     cmd.add_option("--candidates", options.verification.candidates,
-                   "With --verify: distinct nearest models fitted (of the named class)")
+                   "Distinct nearest models aligned to each object")
         ->check(CLI::Range(1, 50))
         ->capture_default_str();
-    cmd.add_flag("--verify-class", options.verification.decide_class,
-                 "With --verify: candidates of any class; the best fit names the class");
+    cmd.add_flag("!--verify-within-class", options.verification.decide_class,
+                 "Align only models of the class the neighbours named (default: candidates of "
+                 "any class; the best fit names the class)");
 }
 
 /// DB positional, -k, --descriptor, --no-weights, --threads. `args` must outlive `cmd`.

@@ -118,6 +118,7 @@ void evaluate_descriptor(const CompareArgs& args, const TestSet& test_set, Compa
     recognizer_options.k = args.k;
     recognizer_options.descriptor = row.descriptor;
     recognizer_options.use_weights = false;  // plain L1 for every descriptor
+    recognizer_options.verify = false;       // the descriptors compared, not the fit
     recognizer_options.threads = args.threads;
     const Recognizer recognizer(row.database, recognizer_options);
     row.models = recognizer.info().models;

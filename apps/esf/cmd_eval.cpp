@@ -42,7 +42,7 @@ struct EvalArgs {
     std::string report;
     int gallery = -1;
     std::string meshes;
-    RecognizerOptions verification;  // --verify, --candidates
+    RecognizerOptions verification;  // --no-verify, --verify-meshes, --candidates, ...
     std::string title;
     bool json = false;
     std::string scenes;
@@ -62,9 +62,9 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.vote = args.vote;
     options.query_samplings = args.samplings;
     options.threads = args.threads;
+    options.verify = args.verification.verify;
     options.verification_meshes = args.verification.verification_meshes;
-    options.verification.candidates = args.verification.verification.candidates;
-    options.verification.decide_class = args.verification.verification.decide_class;
+    options.verification = args.verification.verification;
     return options;
 }
 

@@ -32,6 +32,7 @@ void print_json(const InfoArgs& args, const Database& db, const DatabaseSummary&
     out["failed_models"] = s.failed_models;
     out["views"] = s.views;
     out["skipped_views"] = s.skipped_views;
+    out["surfaces"] = s.surfaces;
     out["categories"] = nlohmann::json::object();
     out["category_views"] = nlohmann::json::object();
     for (const auto& c : s.categories) {
@@ -71,6 +72,13 @@ void print_text(const InfoArgs& args, const Database& db, const DatabaseSummary&
                 s.models, s.categories.size(), s.views, s.skipped_views);
     if (s.failed_models) std::printf(", %zu failed models", s.failed_models);
     std::printf("\n");
+    if (s.surfaces == s.models)
+        std::printf("model surfaces: stored (recognition verifies its hypotheses)\n");
+    else
+        std::printf(
+            "model surfaces: %zu of %zu models (recognition verifies only with "
+            "--verify-meshes ROOT; train again to store them)\n",
+            s.surfaces, s.models);
     for (const auto& k : s.descriptor_kinds)
         std::printf("descriptor: %s version %d, %d floats, weights: %s\n", k.name.c_str(),
                     k.version, k.dimension,

@@ -38,6 +38,7 @@ struct TrainArgs {
     double min_elevation = kTrainingMinElevation;
     double max_elevation = 90.0;
     std::size_t min_points = 50;
+    std::size_t surface_points = kTrainingSurfacePoints;
     std::string catalog;
     bool no_catalog = false;
     GroupOptions groups;
@@ -70,6 +71,7 @@ void run_train(const TrainArgs& args) {
     options.descriptor_options.primitive_weight = args.primitive_weight;
     options.seed = args.seed;
     options.min_points = args.min_points;
+    options.surface_points = args.surface_points;
     options.threads = args.threads;
     options.catalog = args.catalog;
     options.use_catalog = !args.no_catalog;
@@ -208,6 +210,11 @@ void add_train_command(CLI::App& app) {
     cmd->add_option("--min-points", args->min_points,
                     "Views with fewer points are skipped (and counted)")
         ->check(CLI::Range(3, 1000000))
+        ->capture_default_str();
+    cmd->add_option("--surface-points", args->surface_points,
+                    "Samples of each model's surface stored for verification (0: none; "
+                    "recognition then verifies only with --verify-meshes)")
+        ->check(CLI::Range(std::size_t{0}, kMaxModelSurfacePoints))
         ->capture_default_str();
     add_catalog_options(*cmd, args->catalog, args->no_catalog);
     args->groups.add_to(*cmd);

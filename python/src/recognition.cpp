@@ -181,9 +181,13 @@ void bind_recognition(py::module_& m) {
     recognizer
         .def(py::init([](const fs::path& database, std::size_t k, const std::string& descriptor,
                          bool use_weights, int samplings, const std::string& vote, bool every_view,
-                         int threads, const std::optional<fs::path>& verify) {
+                         int threads, bool verify, const std::optional<fs::path>& verify_meshes,
+                         std::size_t candidates, bool verify_within_class) {
                  RecognizerOptions options;
-                 if (verify) options.verification_meshes = verify->string();
+                 options.verify = verify;
+                 if (verify_meshes) options.verification_meshes = verify_meshes->string();
+                 options.verification.candidates = candidates;
+                 options.verification.decide_class = !verify_within_class;
                  options.k = k;
                  options.descriptor = descriptor;
                  options.use_weights = use_weights;
@@ -202,15 +206,22 @@ void bind_recognition(py::module_& m) {
              py::arg("samplings") = defaults.query_samplings,
              py::arg("vote") = to_string(defaults.vote),
              py::arg("every_view") = !defaults.one_view_per_model,
-             py::arg("threads") = defaults.threads, py::arg("verify") = py::none(),
+             py::arg("threads") = defaults.threads, py::arg("verify") = defaults.verify,
+             py::arg("verify_meshes") = py::none(),
+             py::arg("candidates") = defaults.verification.candidates,
+             py::arg("verify_within_class") = !defaults.verification.decide_class,
              "Opens DATABASE (esf train ... -o DATABASE): the ``k`` nearest models (each by its "
              "nearest view; ``every_view``: the k nearest views) are the neighbours; ``vote`` "
              "'nearest' names the nearest one's class (the others give the confidence), "
              "'majority' the most frequent; ``descriptor`` picks the kind when it holds several; "
              "``use_weights`` applies its learned weights; ``samplings`` describes a query that "
-             "many times and averages; ``threads`` 0 = all cores; ``verify``: the folder of meshes "
-             "DATABASE was trained from, to align the nearest models to each object (then "
-             "``Classification.pose`` is the fitted pose and ``.fit`` its score). Raises "
+             "many times and averages; ``threads`` 0 = all cores; ``verify`` aligns the "
+             "``candidates`` "
+             "nearest models to each object with the surfaces the database stores (or those of "
+             "the meshes in ``verify_meshes``, the folder DATABASE was trained from), and the "
+             "best fit names class (only the neighbours' class with ``verify_within_class``), "
+             "model and pose: ``Classification.pose`` is the fitted pose and ``.fit`` its "
+             "score; ``verification`` says whether it is on. Raises "
              "FileNotFoundError / "
              "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")
@@ -252,7 +263,11 @@ void bind_recognition(py::module_& m) {
                                [](const Recognizer& r) { return r.info().categories; })
         .def_property_readonly("descriptor",
                                [](const Recognizer& r) { return r.info().setup.kind.name; })
-        .def_property_readonly("views", [](const Recognizer& r) { return r.info().views; });
+        .def_property_readonly("views", [](const Recognizer& r) { return r.info().views; })
+        .def_property_readonly(
+            "verification", [](const Recognizer& r) { return r.info().verification; },
+            "How classifications are verified: 'stored surfaces', 'meshes of ROOT', 'off' or "
+            "'off: ' and why.");
 
     m.def("evaluate", &evaluate_py, py::arg("database"), py::arg("test_set"),
           py::arg("k") = EvaluationOptions{}.k, py::kw_only(),

@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -134,7 +135,11 @@ struct Recognizer::Impl {
     std::unique_ptr<Classifier> classifier;
     std::size_t dimension = 0;
     std::vector<ModelInfo> models;  // by model id (DescriptorMatrix::models)
-    // Verification: each model's sampled surface and its k-d tree, loaded on first use.
+    // Verification: each model's surface (stored, or sampled from its mesh) and its k-d tree,
+    // loaded on first use; `stored` reads the database's surfaces (under surfaces_mutex).
+    bool verifies = false;
+    std::uint64_t training_seed = 0;  // the models' surface seeds derive from it, as in training
+    std::optional<Database> stored;
     mutable std::mutex surfaces_mutex;
     mutable std::map<int, std::shared_ptr<const PreparedModel>> surfaces;
 
@@ -143,11 +148,21 @@ struct Recognizer::Impl {
         const auto it = surfaces.find(model_id);
         if (it != surfaces.end()) return it->second;
         const ModelInfo& m = models.at(static_cast<std::size_t>(model_id));
-        const std::string path =
-            (std::filesystem::path(options.verification_meshes) / m.file).string();
-        const Mesh mesh = load_mesh(path);
-        auto surface = std::make_shared<const PreparedModel>(sample_model_surface(
-            mesh, m.scale, options.verification.surface_points, model_seed(0, m.category, m.name)));
+        std::optional<ModelSurface> sampled;
+        if (stored) {
+            sampled = stored->model_surface(m.category, m.name);
+            if (!sampled)
+                throw IoError(file_message(
+                    stored->path(), 0,
+                    "model '" + m.category + "/" + m.name + "' has no stored surface"));
+        } else {
+            const std::string path =
+                (std::filesystem::path(options.verification_meshes) / m.file).string();
+            sampled =
+                sample_model_surface(load_mesh(path), m.scale, options.verification.surface_points,
+                                     model_seed(training_seed, m.category, m.name));
+        }
+        auto surface = std::make_shared<const PreparedModel>(std::move(*sampled));
         surfaces.emplace(model_id, surface);
         return surface;
     }
@@ -160,8 +175,8 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
         throw std::invalid_argument("recognizer: query samplings must be >= 1, got " +
                                     std::to_string(options.query_samplings));
     resolve_threads(options.threads);
-    if (!options.verification_meshes.empty()) {
-        validate(options.verification);
+    if (options.verify) validate(options.verification);
+    if (options.verify && !options.verification_meshes.empty()) {
         if (!std::filesystem::is_directory(options.verification_meshes))
             throw IoError(file_message(options.verification_meshes, 0,
                                        "not a folder (verification needs the training meshes)"));
@@ -257,6 +272,29 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     impl_->info.models = matrix.models.size();
     impl_->info.categories = matrix.categories;
     impl_->models = matrix.models;
+    impl_->info.verification = "off";
+    if (options.verify && !options.verification_meshes.empty()) {
+        impl_->verifies = true;
+        try {
+            impl_->training_seed = stored_seed(db.settings());
+        } catch (const std::invalid_argument& e) {
+            fail(e.what());
+        }
+        impl_->info.verification = "meshes of " + options.verification_meshes;
+    } else if (options.verify) {
+        const DatabaseSummary summary = db.summary();
+        if (summary.surfaces == summary.models) {
+            impl_->verifies = true;
+            impl_->info.verification = "stored surfaces";
+            impl_->stored.emplace(path, OpenMode::kRead);
+        } else {
+            impl_->info.verification =
+                "off: " + std::to_string(summary.models - summary.surfaces) + " of " +
+                std::to_string(summary.models) +
+                " models have no stored surface (trained by an earlier esf: train them again, or "
+                "verify with their meshes)";
+        }
+    }
     ClassifierOptions classifier_options;
     classifier_options.k = options.k;
     classifier_options.vote = options.vote;
@@ -364,7 +402,7 @@ std::vector<CloudClassification> Recognizer::classify_batch(std::span<const Poin
     return out;
 }
 
-bool Recognizer::verifies() const { return !impl_->options.verification_meshes.empty(); }
+bool Recognizer::verifies() const { return impl_->verifies; }
 
 void Recognizer::verify(Classification& c, const Observation& observation) const {
     if (!verifies() || c.neighbours.empty()) return;

@@ -149,6 +149,16 @@ void Database::write_model(const ModelEntry& model, const std::string& descripto
         if (!view.descriptors.empty() && !view.skip_reason.empty())
             throw std::invalid_argument(vwhat + ": has descriptors and a skip reason");
     }
+    if (model.surface) {
+        if (!model.error.empty())
+            throw std::invalid_argument(what + ": a failed model has no surface");
+        check_model_surface(*model.surface, what);
+        if (model.surface->points.size() > kMaxModelSurfacePoints)
+            throw std::invalid_argument(what + ": more than " +
+                                        std::to_string(kMaxModelSurfacePoints) + " surface points");
+        if (model.surface->scale != model.scale)
+            throw std::invalid_argument(what + ": the surface's scale is not the model's");
+    }
 
     impl_->transaction([&] {
         if (const auto old = impl_->model_id(model.category, model.name)) {
@@ -197,6 +207,19 @@ void Database::write_model(const ModelEntry& model, const std::string& descripto
                     .bind_blob(4, std::span<const float>(view.descriptors).subspan(sig * dim, dim))
                     .run();
             }
+        }
+        if (model.surface) {
+            const ModelSurface& surface = *model.surface;
+            const std::size_t floats = 3 * surface.points.size();
+            SqliteStatement surface_ins = impl_->prepare(
+                "INSERT INTO model_surfaces(model_id, scale, diameter, points, normals)"
+                " VALUES (?, ?, ?, ?, ?)");
+            surface_ins.bind(1, model_id)
+                .bind(2, surface.scale)
+                .bind(3, surface.diameter)
+                .bind_blob(4, std::span<const float>(surface.points.front().data(), floats))
+                .bind_blob(5, std::span<const float>(surface.normals.front().data(), floats))
+                .run();
         }
     });
 }
@@ -257,6 +280,38 @@ std::vector<ViewEntry> Database::views(const std::string& category, const std::s
     return out;
 }
 
+std::optional<ModelSurface> Database::model_surface(const std::string& category,
+                                                    const std::string& name) const {
+    if (!impl_->has_table("model_surfaces")) return std::nullopt;
+    const auto id = impl_->model_id(category, name);
+    if (!id) return std::nullopt;
+    SqliteStatement s = impl_->prepare(
+        "SELECT scale, diameter, points, normals FROM model_surfaces WHERE model_id = ?");
+    s.bind(1, *id);
+    if (!s.step()) return std::nullopt;
+    const std::string what = file_message(impl_->path, 0, "model '" + category + "/" + name + "'");
+    auto read = [&](int col, const char* part) {
+        const std::vector<float> values = s.floats(col);
+        if (values.size() % 3 != 0 || values.size() / 3 > kMaxModelSurfacePoints)
+            throw IoError(what + ": corrupt surface " + part + " (" +
+                          std::to_string(values.size()) + " floats)");
+        Points out(values.size() / 3);
+        std::copy(values.begin(), values.end(), out.empty() ? nullptr : out.front().data());
+        return out;
+    };
+    ModelSurface surface;
+    surface.scale = s.real(0);
+    surface.diameter = s.real(1);
+    surface.points = read(2, "points");
+    surface.normals = read(3, "normals");
+    try {
+        check_model_surface(surface, what);
+    } catch (const std::invalid_argument& e) {
+        throw IoError(std::string(e.what()) + " (a corrupt stored surface)");
+    }
+    return surface;
+}
+
 DatabaseSummary Database::summary() const {
     DatabaseSummary out;
     std::map<std::string, CategoryInfo> categories;
@@ -277,6 +332,13 @@ DatabaseSummary Database::summary() const {
     }
     for (auto& [name, c] : categories) out.categories.push_back(std::move(c));
     out.descriptor_kinds = impl_->kinds();
+    if (impl_->has_table("model_surfaces")) {
+        SqliteStatement s = impl_->prepare(
+            "SELECT count(*) FROM model_surfaces s JOIN models m ON m.id = s.model_id"
+            " WHERE m.status = 'complete'");
+        s.step();
+        out.surfaces = s.size(0);
+    }
     return out;
 }
 

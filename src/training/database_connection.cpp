@@ -97,6 +97,7 @@ void Database::Impl::open() {
         exec(detail::kWriterPragmas);
         wal = true;
         exec(detail::kWeightsBasis);
+        exec(detail::kModelSurfaces);
     }
 }
 

@@ -74,6 +74,18 @@ CREATE TABLE IF NOT EXISTS weights_basis(
     fingerprint TEXT NOT NULL);
 )sql";
 
+// Each model's surface samples for verification (Database::model_surface): points and unit
+// normals, float32 x y z each. Not in kTables: files written before it existed lack it (their
+// models have no surface), and a writer adds it.
+inline constexpr const char* kModelSurfaces = R"sql(
+CREATE TABLE IF NOT EXISTS model_surfaces(
+    model_id INTEGER PRIMARY KEY REFERENCES models(id) ON DELETE CASCADE,
+    scale REAL NOT NULL,
+    diameter REAL NOT NULL,
+    points BLOB NOT NULL,
+    normals BLOB NOT NULL);
+)sql";
+
 inline constexpr std::array<const char*, 7> kTables = {
     "settings", "categories", "models", "views", "descriptor_kinds", "descriptors", "weights"};
 

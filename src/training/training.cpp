@@ -19,6 +19,7 @@
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/mesh/mesh.hpp"
+#include "esf/mesh/model_surface.hpp"
 #include "esf/training/descriptor_settings.hpp"
 
 namespace esf {
@@ -67,6 +68,10 @@ void validate(const TrainingOptions& options) {
     if (options.min_points < 3)
         throw std::invalid_argument("min_points must be >= 3 (ESF needs a triangle), got " +
                                     std::to_string(options.min_points));
+    if (options.surface_points > kMaxModelSurfacePoints)
+        throw std::invalid_argument("surface points must be at most " +
+                                    std::to_string(kMaxModelSurfacePoints) + ", got " +
+                                    std::to_string(options.surface_points));
     resolve_threads(options.threads);
     // Throws std::invalid_argument: an unknown descriptor (the message lists the valid names)
     // or options out of range; then a baseline's module must load.
@@ -187,6 +192,9 @@ void prepare_job(Job& job, const TrainingOptions& options) {
         }
         job.renderer = std::make_unique<MeshRenderer>(mesh, render);
         job.entry.scale = job.renderer->scale();
+        if (options.surface_points > 0)
+            job.entry.surface =
+                sample_model_surface(mesh, job.entry.scale, options.surface_points, job.seed);
         job.entry.views.resize(job.renderer->view_count());
     } catch (const std::exception& e) {
         const std::string what = e.what();
@@ -194,6 +202,7 @@ void prepare_job(Job& job, const TrainingOptions& options) {
             what.find(job.file->path) == std::string::npos ? job.file->path + ": " + what : what;
         job.renderer.reset();
         job.entry.views.clear();
+        job.entry.surface.reset();
     }
 }
 

@@ -198,11 +198,30 @@ TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTh
         esf::train(root_.string(), db, training);
     }
     const esf::SceneSet set = esf::read_scene_set((base_ / "s" / "scenes.csv").string());
-    const esf::SceneEvaluationReport plain = esf::evaluate_scenes(esf::Recognizer(db_path), set);
-    esf::RecognizerOptions verify;
-    verify.verification_meshes = root_.string();
-    const esf::SceneEvaluationReport verified =
-        esf::evaluate_scenes(esf::Recognizer(db_path, verify), set);
+    esf::RecognizerOptions knn_only;
+    knn_only.verify = false;
+    const esf::SceneEvaluationReport plain =
+        esf::evaluate_scenes(esf::Recognizer(db_path, knn_only), set);
+    // By default the recognizer verifies with the surfaces training stored; sampled again from
+    // the meshes (same seed), they give the same classes, models and poses.
+    const esf::Recognizer stored(db_path);
+    EXPECT_TRUE(stored.verifies());
+    EXPECT_EQ(stored.info().verification, "stored surfaces");
+    const esf::SceneEvaluationReport verified = esf::evaluate_scenes(stored, set);
+    esf::RecognizerOptions from_meshes;
+    from_meshes.verification_meshes = root_.string();
+    const esf::SceneEvaluationReport resampled =
+        esf::evaluate_scenes(esf::Recognizer(db_path, from_meshes), set);
+    ASSERT_EQ(verified.objects.size(), resampled.objects.size());
+    for (std::size_t i = 0; i < verified.objects.size(); ++i) {
+        const esf::SceneObjectOutcome& x = verified.objects[i];
+        const esf::SceneObjectOutcome& y = resampled.objects[i];
+        EXPECT_EQ(x.predicted_model, y.predicted_model);
+        ASSERT_EQ(x.pose.has_value(), y.pose.has_value());
+        if (x.pose) {
+            EXPECT_EQ(*x.pose, *y.pose);
+        }
+    }
     EXPECT_EQ(plain.truth, fs::absolute(root_).lexically_normal().string());
     const esf::SceneTypeSummary& a = plain.types.back();
     const esf::SceneTypeSummary& b = verified.types.back();

@@ -67,7 +67,9 @@ TEST_F(RecognizerTest, QueryDescriptorUsesTheDatabaseSettings) {
 }
 
 TEST_F(RecognizerTest, HeldOutViewsAreClassified) {
-    const esf::Recognizer recognizer(db_path_);
+    esf::RecognizerOptions knn_only;  // the pose is the nearest view's, not a fitted one
+    knn_only.verify = false;
+    const esf::Recognizer recognizer(db_path_, knn_only);
     const esf::Database db(db_path_);
     for (const auto& shape : kShapes) {
         for (std::size_t i = 0; i < kHeldOut.size(); ++i) {
@@ -95,6 +97,65 @@ TEST_F(RecognizerTest, HeldOutViewsAreClassified) {
                 EXPECT_LE(c.neighbours[n - 1].distance, c.neighbours[n].distance);
         }
     }
+}
+
+TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone) {
+    const esf::Points view = held_out_view("mug", kHeldOut[1], 1);
+    const esf::Recognizer stored(db_path_);
+    EXPECT_TRUE(stored.verifies());
+    EXPECT_EQ(stored.info().verification, "stored surfaces");
+    const esf::Classification c = stored.classify(view);
+    EXPECT_EQ(c.class_name, "mug");
+    ASSERT_TRUE(c.fit.has_value());
+    EXPECT_TRUE(c.verified);
+    EXPECT_GT(c.fit->inliers, 0.8);
+
+    esf::RecognizerOptions off;
+    off.verify = false;
+    const esf::Recognizer knn_only(db_path_, off);
+    EXPECT_FALSE(knn_only.verifies());
+    EXPECT_EQ(knn_only.info().verification, "off");
+    EXPECT_FALSE(knn_only.classify(view).fit.has_value());
+
+    // A database written without surfaces (as by an earlier esf): k-NN only, and it says why;
+    // with the meshes it was trained from, the same fit as the stored surfaces give.
+    const fs::path dir = temp_dir();
+    const std::string copy = (dir / "copy.sqlite").string();
+    {
+        const esf::Database from(db_path_);
+        esf::Database to(copy, esf::OpenMode::kWrite);
+        to.set_settings(from.settings());
+        for (const esf::DescriptorKind& kind : from.descriptor_kinds())
+            to.add_descriptor_kind(kind);
+        for (const esf::ModelInfo& m : from.models()) {
+            esf::ModelEntry entry;
+            entry.category = m.category;
+            entry.name = m.name;
+            entry.file = m.file;
+            entry.group = m.group;
+            entry.scale = m.scale;
+            entry.views = from.views(m.category, m.name);
+            to.write_model(entry, "esf");
+        }
+    }
+    const esf::Recognizer bare(copy);
+    EXPECT_FALSE(bare.verifies());
+    EXPECT_NE(bare.info().verification.find("off: 2 of 2 models have no stored surface"),
+              std::string::npos)
+        << bare.info().verification;
+    EXPECT_FALSE(bare.classify(view).fit.has_value());
+    esf::RecognizerOptions meshes;
+    meshes.verification_meshes = (root_ / "meshes").string();
+    const esf::Recognizer resampled(copy, meshes);
+    EXPECT_TRUE(resampled.verifies());
+    const esf::Classification r = resampled.classify(view);
+    EXPECT_EQ(r.best_model, c.best_model);
+    ASSERT_TRUE(r.fit.has_value());
+    EXPECT_EQ(r.fit->inliers, c.fit->inliers);
+    EXPECT_EQ(r.pose, c.pose);
+    meshes.verification_meshes = (root_ / "absent").string();
+    EXPECT_THROW(esf::Recognizer(copy, meshes), esf::IoError);
+    fs::remove_all(dir);
 }
 
 TEST_F(RecognizerTest, OneNearestNeighbourIsTheNearestViewsClass) {

@@ -671,5 +671,90 @@ TEST_F(DatabaseTest, MovedDatabaseKeepsWorking) {
     EXPECT_EQ(b.summary().models, 1u);
 }
 
+/// A small hand-made surface: four points on a unit square, normals +z.
+ModelSurface square_surface(double scale) {
+    ModelSurface s;
+    s.scale = scale;
+    s.diameter = 0.3;
+    s.points = {{0.f, 0.f, 0.f}, {0.1f, 0.f, 0.f}, {0.f, 0.1f, 0.f}, {0.1f, 0.1f, 0.f}};
+    s.normals.assign(4, Eigen::Vector3f::UnitZ());
+    return s;
+}
+
+TEST_F(DatabaseTest, StoresEachModelsSurfaceAndReadsItBackExactly) {
+    const std::string path = file("s.db");
+    {
+        Database db(path, OpenMode::kWrite);
+        db.add_descriptor_kind(kEsf);
+        ModelEntry with = make_model("mug", "a", 1.0f);
+        with.surface = square_surface(with.scale);
+        db.write_model(with, "esf");
+        db.write_model(make_model("mug", "b", 2.0f), "esf");
+    }
+    const Database db(path);
+    const std::optional<ModelSurface> got = db.model_surface("mug", "a");
+    ASSERT_TRUE(got.has_value());
+    EXPECT_EQ(*got, square_surface(1.5));
+    EXPECT_FALSE(db.model_surface("mug", "b").has_value());       // trained without one
+    EXPECT_FALSE(db.model_surface("mug", "absent").has_value());  // no such model
+    EXPECT_EQ(db.summary().surfaces, 1u);
+    {
+        // Replacing the model replaces (here: removes) its surface.
+        Database w(path, OpenMode::kWrite);
+        w.write_model(make_model("mug", "a", 3.0f), "esf");
+    }
+    EXPECT_FALSE(Database(path).model_surface("mug", "a").has_value());
+    EXPECT_EQ(Database(path).summary().surfaces, 0u);
+}
+
+TEST_F(DatabaseTest, RefusesABadSurfaceAndReportsACorruptStoredOne) {
+    const std::string path = file("s.db");
+    Database db(path, OpenMode::kWrite);
+    db.add_descriptor_kind(kEsf);
+    ModelEntry m = make_model("mug", "a", 1.0f);
+    m.surface = square_surface(2.0);  // not the model's scale (1.5)
+    EXPECT_NE(invalid_argument_of([&] { db.write_model(m, "esf"); }).find("scale"),
+              std::string::npos);
+    m.surface = square_surface(m.scale);
+    m.surface->normals.pop_back();
+    EXPECT_NE(invalid_argument_of([&] { db.write_model(m, "esf"); }).find("3 normals for 4"),
+              std::string::npos);
+    m.surface = square_surface(m.scale);
+    m.surface->points[2].x() = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_NE(invalid_argument_of([&] { db.write_model(m, "esf"); }).find("point 2"),
+              std::string::npos);
+    ModelEntry failed = make_model("mug", "f", 1.0f, 0);
+    failed.error = "did not load";
+    failed.surface = square_surface(failed.scale);
+    EXPECT_NE(invalid_argument_of([&] { db.write_model(failed, "esf"); }).find("failed"),
+              std::string::npos);
+    EXPECT_FALSE(db.model_status("mug", "a").has_value());  // nothing written
+
+    m.surface = square_surface(m.scale);
+    db.write_model(m, "esf");
+    raw_sql(path, "UPDATE model_surfaces SET points = x'00000000'");  // one float: not x y z
+    std::string error = io_error_of([&] { (void)Database(path).model_surface("mug", "a"); });
+    EXPECT_NE(error.find(path), std::string::npos) << error;
+    EXPECT_NE(error.find("corrupt surface points"), std::string::npos) << error;
+    raw_sql(path, "UPDATE model_surfaces SET points = normals, diameter = -1");
+    error = io_error_of([&] { (void)Database(path).model_surface("mug", "a"); });
+    EXPECT_NE(error.find("diameter"), std::string::npos) << error;
+    EXPECT_NE(error.find("mug/a"), std::string::npos) << error;
+}
+
+TEST_F(DatabaseTest, AFileWithoutTheSurfaceTableReadsAsHavingNoSurfaces) {
+    const std::string path = file("old.db");
+    {
+        Database db(path, OpenMode::kWrite);
+        db.add_descriptor_kind(kEsf);
+        db.write_model(make_model("mug", "a", 1.0f), "esf");
+    }
+    raw_sql(path, "DROP TABLE model_surfaces");  // as files written before surfaces were stored
+    const Database db(path);
+    EXPECT_FALSE(db.model_surface("mug", "a").has_value());
+    EXPECT_EQ(db.summary().surfaces, 0u);
+    EXPECT_EQ(db.summary().models, 1u);
+}
+
 }  // namespace
 }  // namespace esf

@@ -26,25 +26,9 @@
 
 #include "esf/core/camera.hpp"
 #include "esf/core/point_cloud.hpp"
-#include "esf/mesh/mesh.hpp"
+#include "esf/mesh/model_surface.hpp"
 
 namespace esf {
-
-/// A model's surface, sampled evenly by area: points and outward normals in metres, model frame
-/// (the mesh file's coordinates times `scale`).
-struct ModelSurface {
-    Points points;
-    Points normals;
-    double scale = 1.0;     ///< file units -> metres
-    double diameter = 0.0;  ///< metres: twice the bounding radius
-};
-
-/// Samples `count` points (area-weighted triangles, uniform within each; seeded). Normals follow
-/// the triangles' winding; when most of them point towards the bounding box centre (a mesh wound
-/// clockwise), all are turned round. Throws std::invalid_argument for a bad mesh (check_mesh), a
-/// mesh without area, count 0 or a scale that is not positive and finite.
-ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t count,
-                                  std::uint64_t seed);
 
 struct FitScore {
     double inliers = 0.0;     ///< share of the object's points explained, [0, 1]
@@ -57,10 +41,10 @@ struct FitScore {
 
 struct VerificationOptions {
     std::size_t candidates = 3;  ///< distinct models tried, nearest first (>= 1)
-    /// false: the candidates are models of the class the neighbours named, and verification
-    /// picks the model and pose; true: models of any class, and the best fit names the class too
-    /// (see BENCHMARKS.md for what each does to accuracy).
-    bool decide_class = false;
+    /// true: models of any class, and the best fit names the class too; false: the candidates
+    /// are models of the class the neighbours named, and verification picks the model and pose
+    /// (BENCHMARKS.md, "Verification": deciding the class is the more accurate on real data).
+    bool decide_class = true;
     int iterations = 10;                ///< ICP iterations (>= 1)
     std::size_t surface_points = 2000;  ///< samples of each model's surface
     double inlier_distance = 0.004;     ///< metres

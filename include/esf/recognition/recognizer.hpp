@@ -57,10 +57,17 @@ struct RecognizerOptions {
     /// brings the query nearer its expected histogram. Costs one description per sampling.
     int query_samplings = 1;
     int threads = 0;  ///< building the index, describing and classifying batches; 0 = all cores
-    /// Non-empty: verify every classification (esf/recognition/pose_verification.hpp) with the
-    /// meshes of this folder, the root the database was trained from (each model's stored file
-    /// and scale); the best-fitting of the nearest `verification.candidates` models names the
-    /// class, model and pose. Meshes load once, on first use.
+    /// Verify every classification (esf/recognition/pose_verification.hpp): the nearest
+    /// `verification.candidates` models are aligned to the points and the best fit names the
+    /// class (verification.decide_class), model and 6-DoF pose. Needs each model's surface: the
+    /// ones the database stores (esf train stores them), or `verification_meshes`. A database
+    /// that stores none (trained before they were stored), without verification_meshes, is
+    /// recognised by k-NN only (RecognizerInfo::verification says so). false: k-NN only.
+    bool verify = true;
+    /// Non-empty: the surfaces are sampled from the meshes of this folder, the root the database
+    /// was trained from (each model's stored file and scale, sampled with its training seed: the
+    /// surfaces training stores), instead of read from the database.
+    /// Surfaces load once, on first use.
     std::string verification_meshes;
     VerificationOptions verification;
 };
@@ -101,6 +108,9 @@ struct RecognizerInfo {
     std::size_t rows = 0;    ///< signatures (= views unless multi-signature)
     std::size_t models = 0;  ///< complete models
     std::vector<std::string> categories;
+    /// How classifications are verified: "stored surfaces", "meshes of ROOT", "off", or "off:
+    /// " and why (the database stores no model surfaces).
+    std::string verification;
 };
 
 /// The descriptor of one query cloud: one or more signatures, or why it has none.
@@ -186,14 +196,16 @@ class Recognizer {
     SceneRecognition recognize_scene(const PointCloud& scene,
                                      const SegmentationOptions& options = {}) const;
 
-    /// With verification_meshes: fits the first options.verification.candidates neighbours of
+    /// When verifies(): fits the first options.verification.candidates neighbours of
     /// distinct models (of the named class unless verification.decide_class) to `observation`
     /// and makes the best fit the classification's model, view and refined pose (fit, verified;
     /// neighbours reordered best fit first; with decide_class also its class, the confidence
-    /// its share of the neighbours). Without: leaves `c` as it is. Throws esf::IoError naming a
-    /// mesh that cannot be loaded, std::invalid_argument for an observation fit_model refuses.
+    /// its share of the neighbours). Otherwise leaves `c` as it is. Throws esf::IoError naming a
+    /// mesh that cannot be loaded or a stored surface that is corrupt, std::invalid_argument for an
+    /// observation fit_model refuses.
     void verify(Classification& c, const Observation& observation) const;
-    bool verifies() const;  ///< verification_meshes is set
+    /// Verification is on and has the models' surfaces (stored or from verification_meshes).
+    bool verifies() const;
 
     const RecognizerInfo& info() const;
     const RecognizerOptions& options() const;

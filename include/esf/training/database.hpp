@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "esf/core/enum_names.hpp"
+#include "esf/mesh/model_surface.hpp"
 
 namespace esf {
 
@@ -95,6 +96,9 @@ struct ModelEntry {
     /// Non-empty: the model failed (e.g. its mesh did not load); no views are stored.
     std::string error;
     std::vector<ViewEntry> views;
+    /// The model's surface samples (metres: the file's coordinates times `scale`), stored for
+    /// verification; none for a failed model.
+    std::optional<ModelSurface> surface;
 };
 
 /// A stored model and its counts.
@@ -125,6 +129,7 @@ struct DatabaseSummary {
     std::size_t failed_models = 0;
     std::size_t views = 0;
     std::size_t skipped_views = 0;
+    std::size_t surfaces = 0;  ///< complete models with a stored surface
     std::vector<DescriptorKind> descriptor_kinds;
 };
 
@@ -183,8 +188,9 @@ class Database {
 
     /// Writes a model, its views and their descriptors of kind `descriptor` in one transaction,
     /// replacing a stored model of the same category and name. Throws std::invalid_argument for
-    /// an unknown kind, empty names, duplicate view indices, non-finite values or descriptor
-    /// lengths that are not a multiple of the kind's dimension.
+    /// an unknown kind, empty names, duplicate view indices, non-finite values, descriptor
+    /// lengths that are not a multiple of the kind's dimension, and a surface that
+    /// check_model_surface() refuses, whose scale is not the model's or that a failed model has.
     void write_model(const ModelEntry& model, const std::string& descriptor);
 
     /// Status of a stored model, std::nullopt when absent.
@@ -196,6 +202,12 @@ class Database {
     /// (empty: the only kind stored). Throws std::invalid_argument when the model is absent.
     std::vector<ViewEntry> views(const std::string& category, const std::string& name,
                                  const std::string& descriptor = {}) const;
+
+    /// The stored surface of a model; std::nullopt when the model is absent or none is stored
+    /// (databases trained before surfaces were stored). Throws esf::IoError naming the file for
+    /// a stored surface that is corrupt (check_model_surface()).
+    std::optional<ModelSurface> model_surface(const std::string& category,
+                                              const std::string& name) const;
 
     DatabaseSummary summary() const;
 

@@ -146,6 +146,8 @@ inline constexpr double kTrainingMinElevation = 0.0;
 inline constexpr double kTrainingMinDistanceFactor = 1.5;
 /// The descriptor training stores by default: ESF with the surface angle histograms.
 inline constexpr const char* kTrainingDescriptor = "esf-angles";
+/// Surface samples stored per model for verification.
+inline constexpr std::size_t kTrainingSurfacePoints = 2000;
 
 /// The render options training uses by default: RenderOptions with the cameras of the upper
 /// half of the view sphere (kTrainingMinElevation) at kTrainingCameraDistance to
@@ -176,6 +178,9 @@ struct TrainingOptions {
     std::uint64_t seed = 0;
     /// Views with fewer points (e.g. a thin object seen edge-on) are stored as skipped.
     std::size_t min_points = 50;
+    /// Samples of each model's surface stored for verification (sample_model_surface(), the
+    /// model's seed); 0 stores none (recognition then verifies only with the meshes at hand).
+    std::size_t surface_points = kTrainingSurfacePoints;
     int threads = 0;  ///< 0 = all cores
     /// Catalog CSV; empty: ROOT/catalog.csv when it exists. With a catalog, non-metric models are
     /// scaled so their extent is typical_extent() of their category, and models get its group.
