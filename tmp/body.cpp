@@ -48,4 +48,3 @@ ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t co
         for (Eigen::Vector3f& n : surface.normals) n = -n;
     return surface;
 }
-

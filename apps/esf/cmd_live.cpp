@@ -232,7 +232,8 @@ void run_live(LiveArgs& args) {
         last_arrival = Clock::now();
         if (!first_time) first_time = frame.time;
         const PointCloud cloud = kinect_raw_to_cloud(frame.depth, frame.rgb);
-        const SceneRecognition scene = recognizer.recognize(segment_scene(cloud, segmentation));
+        const SceneRecognition scene =
+            recognizer.recognize(segment_scene(cloud, segmentation), cloud);
         const TrackUpdate update = tracker.update(scene);
         const std::size_t skipped = source->skipped();
         const std::string line =

@@ -176,7 +176,7 @@ void run_scene(SceneArgs& args) {
             SegmentationResult segments = segment_scene(cloud, segmentation);
             const double segment_ms = ms_since(start);
             start = Clock::now();
-            const SceneRecognition scene = recognizer.recognize(std::move(segments));
+            const SceneRecognition scene = recognizer.recognize(std::move(segments), cloud);
             const double recognise_ms = ms_since(start);
             if (args.json)
                 all.push_back(scene_json(file, scene, segment_ms, recognise_ms));

@@ -64,7 +64,9 @@ ModelSurface sample_model_surface(const Mesh& mesh, double scale, std::size_t co
 }
 
 void check_model_surface(const ModelSurface& surface, const std::string& what) {
-    auto fail = [&](const std::string& reason) { throw std::invalid_argument(what + ": " + reason); };
+    auto fail = [&](const std::string& reason) {
+        throw std::invalid_argument(what + ": " + reason);
+    };
     if (surface.points.empty()) fail("a model surface without points");
     if (surface.normals.size() != surface.points.size())
         fail(std::to_string(surface.normals.size()) + " normals for " +

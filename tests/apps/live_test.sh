@@ -14,7 +14,9 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 if [[ $mode == fakenect ]]; then
     command -v fakenect >/dev/null || { echo "fakenect not installed (libfreenect-bin)"; exit 77; }
-    ldd "$esf" | grep -q libfreenect || { echo "esf built without libfreenect"; exit 77; }
+    # grep reads all of ldd's output: with -q it may stop early, and pipefail would take the
+    # SIGPIPE that ldd gets then for a missing library.
+    ldd "$esf" | grep libfreenect >/dev/null || { echo "esf built without libfreenect"; exit 77; }
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
