@@ -2,7 +2,7 @@
 // 11-bit frame to an organised cloud, segmentation, description and classification of every
 // object, and the tracks' update, frame after frame of a recording (read into memory first).
 //
-//   live_bench --db DB --recording DIR [--threads N] [--fusion models|likelihood]
+//   live_bench --db DB --recording DIR [--threads N] [--fusion models|likelihood] [--no-verify]
 //              [benchmark flags]
 //
 // DB: a training database (default $ESF_BENCH_DB or /tmp/esf_all.sqlite); DIR: a recording of
@@ -41,7 +41,7 @@ void BM_LiveFrame(benchmark::State& state) {
         const esf::KinectFrame& frame = g_frames[index++ % g_frames.size()];
         const esf::PointCloud cloud = esf::kinect_raw_to_cloud(frame.depth, frame.rgb);
         const esf::SceneRecognition scene =
-            g_recognizer->recognize(esf::segment_scene(cloud, segmentation));
+            g_recognizer->recognize(esf::segment_scene(cloud, segmentation), cloud);
         const esf::TrackUpdate update = tracker.update(scene);
         objects += scene.objects.size();
         benchmark::DoNotOptimize(update);
@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
     std::string db =
         std::getenv("ESF_BENCH_DB") ? std::getenv("ESF_BENCH_DB") : "/tmp/esf_all.sqlite";
     std::string recording;
+    bool verify = true;
     std::vector<char*> rest = {argv[0]};
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
@@ -69,6 +70,8 @@ int main(int argc, char** argv) {
             recording = argv[++i];
         else if (arg == "--threads" && i + 1 < argc)
             g_threads = std::atoi(argv[++i]);
+        else if (arg == "--no-verify")
+            verify = false;
         else if (arg == "--fusion" && i + 1 < argc)
             g_tracking.fusion = esf::parse_enum<esf::FusionRule>(argv[++i]);
         else
@@ -85,12 +88,15 @@ int main(int argc, char** argv) {
     }
     esf::RecognizerOptions options;
     options.threads = g_threads;
+    options.verify = verify;
     g_recognizer = std::make_unique<esf::Recognizer>(db, options);
     esf::KinectRecordingReader reader(recording);
     while (auto frame = reader.next()) g_frames.push_back(std::move(*frame));
-    std::fprintf(stderr, "live_bench: %s, %zu frames of %s, %d thread(s), fusion rule %s\n",
+    std::fprintf(stderr,
+                 "live_bench: %s, %zu frames of %s, %d thread(s), fusion rule %s, "
+                 "verification: %s\n",
                  db.c_str(), g_frames.size(), recording.c_str(), g_threads,
-                 esf::to_string(g_tracking.fusion));
+                 esf::to_string(g_tracking.fusion), g_recognizer->info().verification.c_str());
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

@@ -8,7 +8,8 @@
 # Defaults: build, 100 scenes a fold, 3 folds (300 scenes), seed 1. Work files go to
 # $PROVING_GROUND_DIR (default: a new temporary folder, removed at the end); scenes and databases
 # already there are reused. Extra `esf eval` options come from $PROVING_GROUND_EVAL (e.g.
-# "--verify $ESF_DATA/meshes"); {meshes} in it stands for the mesh folder.
+# "--no-verify", or "--verify-meshes {meshes}" for databases trained before surfaces were
+# stored); {meshes} in it stands for the mesh folder.
 set -euo pipefail
 bench_name=proving_ground
 source "$(dirname "$0")/bench_env.sh"
