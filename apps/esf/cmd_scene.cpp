@@ -126,14 +126,22 @@ std::string page_name(std::size_t index, const std::string& file) {
 }
 
 /// The nearest training view of each classified object, drawn from its mesh when the meshes
-/// are known.
-std::vector<MatchedView> matched_views(const SceneRecognition& scene, ViewRenderer* views) {
+/// are known; otherwise the fitted model's stored surface where verification placed it.
+std::vector<MatchedView> matched_views(const SceneRecognition& scene, ViewRenderer* views,
+                                       const Recognizer& recognizer) {
     std::vector<MatchedView> out(scene.objects.size());
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         const RecognizedObject& o = scene.objects[i];
         if (!o.classified()) continue;
         if (!views) {
-            out[i].note = "training views are drawn with --meshes ROOT";
+            try {
+                out[i].points = recognizer.posed_surface(o.classification);
+                out[i].posed = !out[i].points.empty();
+            } catch (const std::exception& e) {
+                out[i].note = e.what();
+                continue;
+            }
+            if (!out[i].posed) out[i].note = "training views are drawn with --meshes ROOT";
             continue;
         }
         try {
@@ -183,7 +191,8 @@ void run_scene(SceneArgs& args) {
             else
                 print_scene(file, scene, segment_ms, recognise_ms);
             if (!args.report.empty()) {
-                const std::vector<MatchedView> matched = matched_views(scene, views.get());
+                const std::vector<MatchedView> matched =
+                    matched_views(scene, views.get(), recognizer);
                 const std::string name = page_name(links.size(), file);
                 write_page(args.report, name,
                            scene_page_html(file, cloud, scene, matched, page_options));

@@ -404,6 +404,28 @@ std::vector<CloudClassification> Recognizer::classify_batch(std::span<const Poin
 
 bool Recognizer::verifies() const { return impl_->verifies; }
 
+Points Recognizer::posed_surface(const Classification& c) const {
+    if (!verifies() || !c.fit) return {};
+    const auto& models = impl_->models;
+    const auto it = std::find_if(models.begin(), models.end(), [&](const ModelInfo& m) {
+        return m.category == c.class_name && m.name == c.best_model;
+    });
+    if (it == models.end()) return {};
+    const auto model = impl_->surface(static_cast<int>(it - models.begin()));
+    const ModelSurface& surface = model->surface();
+    // The pose takes the file's coordinates to the camera; the samples are those times the scale.
+    const Eigen::Matrix4d pose = c.pose.cast<double>();
+    const Eigen::Matrix3d linear = pose.topLeftCorner<3, 3>() / surface.scale;
+    const Eigen::Vector3d t = pose.topRightCorner<3, 1>();
+    Points out;
+    for (std::size_t i = 0; i < surface.points.size(); ++i) {
+        const Eigen::Vector3d p = linear * surface.points[i].cast<double>() + t;
+        const Eigen::Vector3d n = linear * surface.normals[i].cast<double>();
+        if (n.dot(p) < 0.0) out.push_back(p.cast<float>());
+    }
+    return out;
+}
+
 void Recognizer::verify(Classification& c, const Observation& observation) const {
     if (!verifies() || c.neighbours.empty()) return;
     const VerificationOptions& o = impl_->options.verification;

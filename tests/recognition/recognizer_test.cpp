@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -109,13 +110,26 @@ TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone)
     ASSERT_TRUE(c.fit.has_value());
     EXPECT_TRUE(c.verified);
     EXPECT_GT(c.fit->inliers, 0.8);
+    // The fitted model's camera-facing surface, where the fit placed it, covers the points it
+    // was fitted to (some of it faces the camera behind a nearer wall: the converse is weaker).
+    const esf::Points posed = stored.posed_surface(c);
+    ASSERT_GT(posed.size(), 100u);
+    std::size_t near = 0;
+    for (const Eigen::Vector3f& q : view) {
+        float best = std::numeric_limits<float>::max();
+        for (const Eigen::Vector3f& p : posed) best = std::min(best, (p - q).squaredNorm());
+        near += best < 0.01f * 0.01f;
+    }
+    EXPECT_GT(static_cast<double>(near), 0.8 * static_cast<double>(view.size()));
 
     esf::RecognizerOptions off;
     off.verify = false;
     const esf::Recognizer knn_only(db_path_, off);
     EXPECT_FALSE(knn_only.verifies());
     EXPECT_EQ(knn_only.info().verification, "off");
-    EXPECT_FALSE(knn_only.classify(view).fit.has_value());
+    const esf::Classification unverified = knn_only.classify(view);
+    EXPECT_FALSE(unverified.fit.has_value());
+    EXPECT_TRUE(knn_only.posed_surface(unverified).empty());
 
     // A database written without surfaces (as by an earlier esf): k-NN only, and it says why;
     // with the meshes it was trained from, the same fit as the stored surfaces give.

@@ -206,6 +206,11 @@ class Recognizer {
     void verify(Classification& c, const Observation& observation) const;
     /// Verification is on and has the models' surfaces (stored or from verification_meshes).
     bool verifies() const;
+    /// The surface samples of the model `c` names, placed where its fit put them (camera frame,
+    /// Classification::pose), those that face the camera: what a picture draws as the fitted
+    /// model. Empty when `c` has no fit or names a model the database does not hold. Throws
+    /// what verify() throws for a surface that cannot be loaded.
+    Points posed_surface(const Classification& c) const;
 
     const RecognizerInfo& info() const;
     const RecognizerOptions& options() const;
