@@ -21,8 +21,8 @@ struct RecognizerArgs {
     bool every_view = false;
 };
 
-/// --no-verify, --verify-meshes ROOT, --candidates N, --verify-within-class: hypothesis
-/// verification (on by default, with the surfaces the database stores).
+/// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --verify-within-class:
+/// hypothesis verification (on by default, with the surfaces the database stores).
 inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
     cmd.add_flag("!--no-verify", options.verify,
                  "k-NN only: do not align the nearest models to the points (default: the best "
@@ -34,6 +34,12 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
     cmd.add_option("--candidates", options.verification.candidates,
                    "Distinct nearest models aligned to each object")
         ->check(CLI::Range(1, 50))
+        ->capture_default_str();
+    cmd.add_option("--accept-score", options.verification.accept_score,
+                   "A verified fit scoring this much (0.5 x (inliers + support) - violations) "
+                   "ends the search: the farther candidates are not fitted (2: fit them all; "
+                   "0.7: a fifth faster, a few more cans named box)")
+        ->check(CLI::Range(-1.0, 2.0))
         ->capture_default_str();
     cmd.add_flag("!--verify-within-class", options.verification.decide_class,
                  "Align only models of the class the neighbours named (default: candidates of "

@@ -191,6 +191,7 @@ void validate(const VerificationOptions& o) {
     if (o.iterations < 1 || o.iterations > 1000) fail("iterations must be in [1, 1000]");
     if (o.surface_points < 100 || o.surface_points > 1000000)
         fail("surface points must be in [100, 1000000]");
+    if (!(o.accept_score >= -1.0 && o.accept_score <= 2.0)) fail("accept score must be in [-1, 2]");
     if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
         fail("inlier distance must be in (0, 1) m");
     if (!(o.violation_margin > 0.0 && o.violation_margin < 1.0))

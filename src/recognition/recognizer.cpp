@@ -442,6 +442,10 @@ void Recognizer::verify(Classification& c, const Observation& observation) const
     const PreparedObservation prepared(observation, o.camera);
     std::vector<PoseFit> fits;
     for (const std::size_t i : picks) {
+        if (!fits.empty() && fits.back().verified && fits.back().fit.score() >= o.accept_score) {
+            picks.resize(fits.size());  // good enough: the farther candidates are not fitted
+            break;
+        }
         // A model the database rescaled (not metric in its catalog) has a guessed size.
         const int model = c.neighbours[i].model_id;
         const bool guessed = impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;

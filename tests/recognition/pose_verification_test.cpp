@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -177,6 +178,13 @@ TEST(FitModel, RejectsBadInput) {
     bad.iterations = 0;
     EXPECT_THROW(esf::fit_model(surface, Eigen::Matrix4d::Identity(), {some, nullptr}, bad),
                  std::invalid_argument);
+    bad = {};
+    bad.accept_score = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.accept_score = 3.0;
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.accept_score = 2.0;
+    EXPECT_NO_THROW(esf::validate(bad));
 }
 
 }  // namespace

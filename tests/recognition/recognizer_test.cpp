@@ -131,6 +131,19 @@ TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone)
     EXPECT_FALSE(unverified.fit.has_value());
     EXPECT_TRUE(knn_only.posed_surface(unverified).empty());
 
+    // Candidates are fitted nearest first, and a verified fit scoring accept_score ends the
+    // search: with -1 the first verified one (here the nearest model) names the object; with 2
+    // (the default) every candidate is fitted and the best fit wins.
+    esf::RecognizerOptions first_fit, every_fit;
+    first_fit.verification.accept_score = -1.0;
+    every_fit.verification.accept_score = 2.0;
+    const esf::Classification f = esf::Recognizer(db_path_, first_fit).classify(view);
+    const esf::Classification e = esf::Recognizer(db_path_, every_fit).classify(view);
+    ASSERT_TRUE(f.fit && e.fit);
+    ASSERT_TRUE(f.verified);
+    EXPECT_EQ(f.best_model, unverified.neighbours.front().model_name);
+    EXPECT_GE(e.fit->score(), f.fit->score());
+
     // A database written without surfaces (as by an earlier esf): k-NN only, and it says why;
     // with the meshes it was trained from, the same fit as the stored surfaces give.
     const fs::path dir = temp_dir();
