@@ -73,6 +73,16 @@ inline void add_recognizer_options(CLI::App& cmd, RecognizerArgs& args) {
     add_verification_options(cmd, args.options);
 }
 
+/// One warning line when verification is asked for (the default) and the database cannot give
+/// it: trained before esf stored the models' surfaces.
+inline void warn_if_unverified(const Recognizer& recognizer) {
+    if (recognizer.options().verify && !recognizer.verifies())
+        std::fprintf(stderr,
+                     "esf: warning: %s: verification %s: k-NN only (train again, or give the "
+                     "meshes with --verify-meshes ROOT)\n",
+                     recognizer.info().database.c_str(), recognizer.info().verification.c_str());
+}
+
 inline RecognizerOptions recognizer_options(const RecognizerArgs& args) {
     RecognizerOptions options = args.options;
     options.use_weights = !args.no_weights;

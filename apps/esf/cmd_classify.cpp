@@ -30,6 +30,7 @@ void run_classify(const ClassifyArgs& args) {
     const Recognizer recognizer(args.recognizer.database, recognizer_options(args.recognizer));
     if (!args.recognizer.no_weights)
         warn_if_weights_stale(args.recognizer.database, recognizer.info().setup.kind.name);
+    warn_if_unverified(recognizer);
     const std::size_t n = args.files.size();
 
     // Read and describe every file in parallel (one cloud in memory per worker), then classify

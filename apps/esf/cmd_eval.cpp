@@ -73,6 +73,7 @@ void run_scene_eval(const EvalArgs& args) {
     const SceneSet set = read_scene_set(args.scenes);
     const Recognizer recognizer(args.database, recognizer_options(args));
     if (!args.no_weights) warn_if_weights_stale(args.database, recognizer.info().setup.kind.name);
+    warn_if_unverified(recognizer);
     SceneEvaluationOptions options;
     options.segmentation.grouping = args.grouping;
     options.segmentation.threads = args.threads;
@@ -222,6 +223,7 @@ void run_eval(const EvalArgs& args) {
         const Recognizer recognizer(args.database, recognizer_options(args));
         if (!args.no_weights)
             warn_if_weights_stale(args.database, recognizer.info().setup.kind.name);
+        warn_if_unverified(recognizer);
         EvaluationOptions options;
         options.k = args.k;
         options.threads = args.threads;

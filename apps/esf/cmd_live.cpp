@@ -180,6 +180,7 @@ void run_live(LiveArgs& args) {
     const Recognizer recognizer(args.recognizer.database, recognizer_options(args.recognizer));
     if (!args.recognizer.no_weights)
         warn_if_weights_stale(args.recognizer.database, recognizer.info().setup.kind.name);
+    warn_if_unverified(recognizer);
 
     const bool device = args.recording.empty();
     if (device && !kinect_supported()) open_kinect_source(args.device);  // throws how to get it

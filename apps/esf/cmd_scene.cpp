@@ -165,6 +165,7 @@ void run_scene(SceneArgs& args) {
     const Recognizer recognizer(args.recognizer.database, recognizer_options(args.recognizer));
     if (!args.recognizer.no_weights)
         warn_if_weights_stale(args.recognizer.database, recognizer.info().setup.kind.name);
+    warn_if_unverified(recognizer);
 
     std::unique_ptr<ViewRenderer> views;
     if (!args.meshes.empty())

@@ -288,11 +288,9 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
             impl_->info.verification = "stored surfaces";
             impl_->stored.emplace(path, OpenMode::kRead);
         } else {
-            impl_->info.verification =
-                "off: " + std::to_string(summary.models - summary.surfaces) + " of " +
-                std::to_string(summary.models) +
-                " models have no stored surface (trained by an earlier esf: train them again, or "
-                "verify with their meshes)";
+            impl_->info.verification = "off: " + std::to_string(summary.models - summary.surfaces) +
+                                       " of " + std::to_string(summary.models) +
+                                       " models have no stored surface (trained by an earlier esf)";
         }
     }
     ClassifierOptions classifier_options;
