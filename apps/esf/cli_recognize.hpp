@@ -119,6 +119,7 @@ inline void add_classification_json(nlohmann::json& out, const Classification& c
     out["pose"] = pose_json(c.pose);
     if (c.fit) {
         out["fit"] = {{"inliers", c.fit->inliers},
+                      {"support", c.fit->support},
                       {"violations", c.fit->violations},
                       {"rms_mm", c.fit->rms_mm}};
         out["verified"] = c.verified;

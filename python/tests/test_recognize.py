@@ -220,7 +220,9 @@ def test_verification_fits_the_model_and_matches_the_cli(cli, database, meshes, 
     out = json.loads(cli("classify", database, path, "--json").stdout)
     out = out[0] if isinstance(out, list) else out
     assert out["model"] == c.model and out["verified"] == c.verified
+    assert set(out["fit"]) == set(c.fit)
     assert out["fit"]["inliers"] == pytest.approx(c.fit["inliers"])
+    assert out["fit"]["support"] == pytest.approx(c.fit["support"])
     np.testing.assert_allclose(c.pose.ravel(), out["pose"], rtol=1e-5, atol=1e-5)
     out = json.loads(cli("classify", database, path, "--no-verify", "--json").stdout)
     out = out[0] if isinstance(out, list) else out
