@@ -24,9 +24,10 @@ struct RecognizerArgs {
 /// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --verify-within-class:
 /// hypothesis verification (on by default, with the surfaces the database stores).
 inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
-    cmd.add_flag("!--no-verify", options.verify,
-                 "k-NN only: do not align the nearest models to the points (default: the best "
-                 "fit of the nearest models names class, model and 6-DoF pose, with its fit)");
+    cmd.add_flag_callback(
+        "--no-verify", [&options] { options.verify = false; },
+        "k-NN only: do not align the nearest models to the points (default: the best "
+        "fit of the nearest models names class, model and 6-DoF pose, with its fit)");
     cmd.add_option("--verify-meshes", options.verification_meshes,
                    "Verify with the meshes of ROOT (the folder DB was trained from), for a "
                    "database trained before esf stored the models' surfaces")
@@ -41,9 +42,10 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
                    "0.7: a fifth faster, a few more cans named box)")
         ->check(CLI::Range(-1.0, 2.0))
         ->capture_default_str();
-    cmd.add_flag("!--verify-within-class", options.verification.decide_class,
-                 "Align only models of the class the neighbours named (default: candidates of "
-                 "any class; the best fit names the class)");
+    cmd.add_flag_callback(
+        "--verify-within-class", [&options] { options.verification.decide_class = false; },
+        "Align only models of the class the neighbours named (default: candidates of "
+        "any class; the best fit names the class)");
 }
 
 /// DB positional, -k, --descriptor, --no-weights, --threads. `args` must outlive `cmd`.
