@@ -189,8 +189,8 @@ void validate(const VerificationOptions& o) {
     };
     if (o.candidates < 1) fail("candidates must be >= 1");
     if (o.iterations < 1 || o.iterations > 1000) fail("iterations must be in [1, 1000]");
-    if (o.surface_points < 100 || o.surface_points > 1000000)
-        fail("surface points must be in [100, 1000000]");
+    if (o.surface_points < 100 || o.surface_points > kMaxModelSurfacePoints)
+        fail("surface points must be in [100, " + std::to_string(kMaxModelSurfacePoints) + "]");
     if (!(o.accept_score >= -1.0 && o.accept_score <= 2.0)) fail("accept score must be in [-1, 2]");
     if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
         fail("inlier distance must be in (0, 1) m");
@@ -249,8 +249,7 @@ struct PreparedModel::Impl {
 };
 
 PreparedModel::PreparedModel(ModelSurface surface) {
-    if (surface.points.empty() || surface.points.size() != surface.normals.size())
-        throw std::invalid_argument("verification: empty model surface");
+    check_model_surface(surface, "verification");
     impl_ = std::make_unique<Impl>(std::move(surface));
 }
 

@@ -186,7 +186,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
         throw std::invalid_argument(file_message(path, 0, reason));
     };
 
-    const Database db(path, OpenMode::kRead);
+    Database db(path, OpenMode::kRead);  // kept for the stored surfaces when they verify
     const std::vector<DescriptorKind> kinds = db.descriptor_kinds();
     if (kinds.empty()) fail("empty database: no descriptors (train it first with esf train)");
     DescriptorKind kind;
@@ -286,7 +286,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
         if (summary.surfaces == summary.models) {
             impl_->verifies = true;
             impl_->info.verification = "stored surfaces";
-            impl_->stored.emplace(path, OpenMode::kRead);
+            impl_->stored.emplace(std::move(db));
         } else {
             impl_->info.verification = "off: " + std::to_string(summary.models - summary.surfaces) +
                                        " of " + std::to_string(summary.models) +

@@ -99,8 +99,8 @@ class PreparedObservation {
 };
 
 /// A model's surface made ready for several hypotheses: its k-d tree (model frame) is built
-/// once. Throws std::invalid_argument for an empty surface or one whose normals do not match its
-/// points.
+/// once. Throws std::invalid_argument for a surface check_model_surface() refuses (empty, normals
+/// that do not match its points, values that are not finite).
 class PreparedModel {
   public:
     explicit PreparedModel(ModelSurface surface);
