@@ -68,8 +68,13 @@ sys.exit(0 if named and all(t['model'].startswith('gen_' + t['class'] + '_') for
 fi
 
 # Under fakenect: --frames, then the end of the recording (nothing hangs: fakenect neither loops
-# nor exits there), with stdout holding JSON only.
-timeout 60 fakenect rec/sequence_000 "$esf" live db.sqlite --frames 3 --threads 1 \
+# nor exits there), with stdout holding JSON only. fakenect plays at the recording's clock and esf
+# live skips the frames it cannot keep up with, so the --frames run plays a recording at 2 frames
+# a second: a slow build (sanitizers) then still processes every frame. The same slow recording
+# is interrupted below.
+"$esf" record-scenes models -o slow -n 1 --frames 20 --frame-rate 2 --seed 1 --types isolated \
+    --threads 2 >/dev/null
+timeout 60 fakenect slow/sequence_000 "$esf" live db.sqlite --frames 3 --threads 1 \
     >out.jsonl 2>err.txt || fail "fakenect --frames 3: $(cat err.txt)"
 check out.jsonl --lines 3 || fail "JSON lines under fakenect"
 grep -q '^esf live: 3 frames processed, .*fakenect recording .*: --frames reached$' err.txt ||
@@ -83,9 +88,7 @@ summary=$(grep '^esf live: ' err.txt) || fail "no summary: $(cat err.txt)"
 [[ $summary == *": the recording ended" ]] || fail "summary: $summary"
 grep -q 'No more lines' err.txt || fail "fakenect's warning should be on stderr"
 
-# Ctrl-C: a slow recording (2 frames a second), interrupted after 3 s: exit 130.
-"$esf" record-scenes models -o slow -n 1 --frames 20 --frame-rate 2 --seed 1 --types isolated \
-    --threads 2 >/dev/null
+# Ctrl-C: the slow recording (2 frames a second), interrupted after 3 s: exit 130.
 set +e
 timeout --preserve-status -s INT 3 fakenect slow/sequence_000 "$esf" live db.sqlite >out.jsonl 2>err.txt
 status=$?
