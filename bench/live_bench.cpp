@@ -3,6 +3,7 @@
 // object, and the tracks' update, frame after frame of a recording (read into memory first).
 //
 //   live_bench --db DB --recording DIR [--threads N] [--fusion models|likelihood] [--no-verify]
+//              [--no-prior-fits]
 //              [benchmark flags]
 //
 // DB: a training database (default $ESF_BENCH_DB or /tmp/esf_all.sqlite); DIR: a recording of
@@ -40,11 +41,10 @@ void BM_LiveFrame(benchmark::State& state) {
     for (auto _ : state) {
         const esf::KinectFrame& frame = g_frames[index++ % g_frames.size()];
         const esf::PointCloud cloud = esf::kinect_raw_to_cloud(frame.depth, frame.rgb);
-        const esf::SceneRecognition scene =
-            g_recognizer->recognize(esf::segment_scene(cloud, segmentation), cloud);
-        const esf::TrackUpdate update = tracker.update(scene);
-        objects += scene.objects.size();
-        benchmark::DoNotOptimize(update);
+        const esf::TrackedFrame tracked =
+            esf::track_frame(*g_recognizer, tracker, cloud, segmentation);
+        objects += tracked.scene.objects.size();
+        benchmark::DoNotOptimize(tracked.update);
     }
     state.SetItemsProcessed(state.iterations());
     state.counters["objects_per_frame"] =
@@ -72,6 +72,8 @@ int main(int argc, char** argv) {
             g_threads = std::atoi(argv[++i]);
         else if (arg == "--no-verify")
             verify = false;
+        else if (arg == "--no-prior-fits")
+            g_tracking.prior_fits = false;
         else if (arg == "--fusion" && i + 1 < argc)
             g_tracking.fusion = esf::parse_enum<esf::FusionRule>(argv[++i]);
         else
@@ -94,9 +96,10 @@ int main(int argc, char** argv) {
     while (auto frame = reader.next()) g_frames.push_back(std::move(*frame));
     std::fprintf(stderr,
                  "live_bench: %s, %zu frames of %s, %d thread(s), fusion rule %s, "
-                 "verification: %s\n",
+                 "verification: %s, prior fits %s\n",
                  db.c_str(), g_frames.size(), recording.c_str(), g_threads,
-                 esf::to_string(g_tracking.fusion), g_recognizer->info().verification.c_str());
+                 esf::to_string(g_tracking.fusion), g_recognizer->info().verification.c_str(),
+                 g_tracking.prior_fits ? "on" : "off");
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();
     return 0;

@@ -2,7 +2,8 @@
 // segmentation, recognition and tracking, each true object scored by its own frame and by its
 // track, in every frame and after 1, 10 and 30 frames (esf/evaluation/scene_sequences.hpp).
 //
-//   live_fusion DB DIR [--threads N] [--fusion models|likelihood]
+//   live_fusion DB DIR [--threads N] [--fusion models|likelihood] [--no-verify]
+//               [--no-prior-fits]
 //
 // Use model groups the database does not hold:
 //   esf train ROOT -o held_out.sqlite --other-folds 0/3
@@ -19,7 +20,8 @@
 int main(int argc, char** argv) {
     if (argc < 3) {
         std::fprintf(stderr,
-                     "usage: live_fusion DB DIR [--threads N] [--fusion models|likelihood]\n");
+                     "usage: live_fusion DB DIR [--threads N] [--fusion models|likelihood] "
+                     "[--no-verify] [--no-prior-fits]\n");
         return 1;
     }
     esf::RecognizerOptions options;
@@ -27,6 +29,10 @@ int main(int argc, char** argv) {
     try {
         for (int i = 3; i < argc; ++i) {
             const std::string arg = argv[i];
+            if (arg == "--no-verify" || arg == "--no-prior-fits") {
+                (arg == "--no-verify" ? options.verify : fusion.tracking.prior_fits) = false;
+                continue;
+            }
             if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
             if (arg == "--threads")
                 options.threads = std::atoi(argv[++i]);
@@ -42,9 +48,12 @@ int main(int argc, char** argv) {
         auto pct = [](std::size_t n, std::size_t d) {
             return d ? 100.0 * static_cast<double>(n) / static_cast<double>(d) : 0.0;
         };
-        std::printf("%zu frames in %.1f s (%.1f frames/s), fusion rule %s\n", r.frames, r.seconds,
-                    static_cast<double>(r.frames) / r.seconds,
-                    esf::to_string(fusion.tracking.fusion));
+        std::printf(
+            "%zu frames in %.1f s (%.1f frames/s), fusion rule %s, %s, prior "
+            "fits %s\n",
+            r.frames, r.seconds, static_cast<double>(r.frames) / r.seconds,
+            esf::to_string(fusion.tracking.fusion), recognizer.info().verification.c_str(),
+            fusion.tracking.prior_fits ? "on" : "off");
         std::printf(
             "every frame: %zu objects (%zu of a class without a model in the database), named "
             "right by their frame %.1f %%, by their track %.1f %%\n",

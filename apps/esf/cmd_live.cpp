@@ -123,8 +123,18 @@ nlohmann::json frame_json(std::size_t frame, double time, std::size_t skipped,
         const RecognizedObject& o = scene.objects[i];
         nlohmann::json entry;
         if (o.classified()) {
-            entry["class"] = o.classification.class_name;
-            entry["confidence"] = rounded(o.classification.confidence);
+            const Classification& c = o.classification;
+            entry["class"] = c.class_name;
+            entry["confidence"] = rounded(c.confidence);
+            if (c.fit) {  // verified: the model aligned to the points, and how well
+                entry["model"] = c.best_model;
+                entry["pose"] = pose_json(c.pose);
+                entry["fit"] = {{"inliers", rounded(c.fit->inliers)},
+                                {"support", rounded(c.fit->support)},
+                                {"violations", rounded(c.fit->violations)},
+                                {"rms_mm", rounded(c.fit->rms_mm, 100)}};
+                entry["verified"] = c.verified;
+            }
         } else {
             entry["class"] = nullptr;
             entry["confidence"] = 0.0;
@@ -152,6 +162,11 @@ nlohmann::json frame_json(std::size_t frame, double time, std::size_t skipped,
         entry["frames"] = t.frames;
         entry["misses"] = t.misses;
         entry["position"] = position_json(t.position);
+        if (t.fit)  // its last verified fit
+            entry["fit"] = {{"class", t.fit->class_name},
+                            {"model", t.fit->model_name},
+                            {"pose", pose_json(t.fit->pose)},
+                            {"score", rounded(t.fit->score)}};
         out["tracks"].push_back(std::move(entry));
     }
     return out;
@@ -233,9 +248,9 @@ void run_live(LiveArgs& args) {
         last_arrival = Clock::now();
         if (!first_time) first_time = frame.time;
         const PointCloud cloud = kinect_raw_to_cloud(frame.depth, frame.rgb);
-        const SceneRecognition scene =
-            recognizer.recognize(segment_scene(cloud, segmentation), cloud);
-        const TrackUpdate update = tracker.update(scene);
+        const TrackedFrame tracked = track_frame(recognizer, tracker, cloud, segmentation);
+        const SceneRecognition& scene = tracked.scene;
+        const TrackUpdate& update = tracked.update;
         const std::size_t skipped = source->skipped();
         const std::string line =
             frame_json(processed, frame.time - *first_time, skipped, scene, update, tracker).dump();
@@ -292,10 +307,13 @@ void add_live_command(CLI::App& app) {
         "best class stands out, and the track names the class of the model that earned most; "
         "likelihood: summed class log-likelihoods). Prints one "
         "JSON line per processed frame on stdout: {frame, time, skipped, message, objects: "
-        "[{class, confidence, track, centroid, size, points}], tracks: [{id, class, "
-        "model, confidence, frames, misses, position}]} (metres, camera frame; a track's position "
-        "is "
-        "on the table plane); a status line on stderr when it is a terminal, and a summary "
+        "[{class, confidence, track, centroid, size, points, and when verified model, pose, "
+        "fit, verified}], tracks: [{id, class, model, confidence, frames, misses, position, and "
+        "fit: {class, model, pose, score}, its last verified fit}]} (metres, camera frame; poses "
+        "16 numbers, model -> camera, row-major; a track's position is on the table plane). A "
+        "track's last verified model is fitted first from where it stood and kept while it "
+        "fits (--no-prior-fits: every frame verified afresh, a third slower). A status line "
+        "on stderr when it is a terminal, and a summary "
         "line at the end. Frames that arrive while one is processed replace it and are "
         "counted as skipped. Ends at --frames, --seconds, the end of a recording or Ctrl-C "
         "(exit 130); no frame for --timeout seconds or a lost device is an error (exit 2).");
@@ -327,6 +345,10 @@ void add_live_command(CLI::App& app) {
                     "Frames in a row a track survives unseen")
         ->check(CLI::Range(0, 1000))
         ->capture_default_str();
+    cmd->add_flag_callback(
+        "--no-prior-fits", [args] { args->tracking.prior_fits = false; },
+        "Verify every frame afresh instead of first fitting each track's last verified model "
+        "from where it stood");
     add_enum_option(*cmd, "--fusion", args->tracking.fusion,
                     "How a track fuses its frames: models (the nearest models' earnings summed "
                     "over the frames) or likelihood (summed class log-likelihoods)");

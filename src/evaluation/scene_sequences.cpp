@@ -237,9 +237,10 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
                     throw IoError(file_message(name, 0, "fewer frames than sequences.json lists"));
                 const auto start = Clock::now();
                 const PointCloud cloud = kinect_raw_to_cloud(frame->depth, frame->rgb);
-                const SceneRecognition scene =
-                    recognizer.recognize(segment_scene(cloud, options.segmentation));
-                const TrackUpdate update = tracker.update(scene);
+                const TrackedFrame tracked =
+                    track_frame(recognizer, tracker, cloud, options.segmentation);
+                const SceneRecognition& scene = tracked.scene;
+                const TrackUpdate& update = tracked.update;
                 result.seconds += std::chrono::duration<double>(Clock::now() - start).count();
                 ++result.frames;
 

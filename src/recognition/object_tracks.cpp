@@ -71,6 +71,11 @@ std::vector<FusedClass> fuse_models(const std::vector<Tally>& models) {
     return classes;
 }
 
+/// A centroid dropped onto the table plane along its normal (the centroid without a plane).
+Eigen::Vector3f table_position(bool plane_found, const Plane& plane, const Eigen::Vector3f& c) {
+    return plane_found ? Eigen::Vector3f(c - plane.height(c) * plane.normal) : c;
+}
+
 }  // namespace
 
 void validate(const TrackingOptions& options) {
@@ -155,12 +160,14 @@ std::vector<TrackedObservation> scene_observations(const SceneRecognition& scene
     out.reserve(scene.objects.size());
     for (const RecognizedObject& o : scene.objects) {
         TrackedObservation t;
-        const Eigen::Vector3f& c = o.cluster.centroid;
-        t.position =
-            scene.plane_found ? Eigen::Vector3f(c - scene.plane.height(c) * scene.plane.normal) : c;
+        t.position = table_position(scene.plane_found, scene.plane, o.cluster.centroid);
         if (o.classified()) {
             t.evidence = class_evidence(o.classification);
             t.models = model_evidence(o.classification);
+            const Classification& k = o.classification;
+            if (k.verified && k.fit)
+                t.fit = FitEvidence{k.class_name, k.best_model, std::max(0.0, k.fit->score()),
+                                    k.best_model_id, k.pose};
         }
         out.push_back(std::move(t));
     }
@@ -184,6 +191,26 @@ TrackUpdate ObjectTracker::update(const SceneRecognition& scene) {
     return update(observations);
 }
 
+std::vector<std::size_t> ObjectTracker::match(std::span<const Eigen::Vector3f> positions) const {
+    // Candidate pairs within the match distance, nearest first (ties: lower track id, then lower
+    // object index), each track and each object at most once.
+    std::vector<std::tuple<double, std::uint64_t, std::size_t, std::size_t>> pairs;
+    for (std::size_t t = 0; t < tracks_.size(); ++t)
+        for (std::size_t o = 0; o < positions.size(); ++o) {
+            const double d = static_cast<double>((positions[o] - tracks_[t].position).norm());
+            if (d <= options_.match_distance) pairs.emplace_back(d, tracks_[t].id, t, o);
+        }
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<bool> track_taken(tracks_.size(), false);
+    std::vector<std::size_t> object_track(positions.size(), tracks_.size());
+    for (const auto& [d, id, t, o] : pairs) {
+        if (track_taken[t] || object_track[o] < tracks_.size()) continue;
+        track_taken[t] = true;
+        object_track[o] = t;
+    }
+    return object_track;
+}
+
 TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observations) {
     const bool by_models = options_.fusion == FusionRule::kNearestModels;
     // Checked (and scored) before anything changes, so that a refused frame leaves no trace.
@@ -203,22 +230,16 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
     result.frame = frames_;
     result.object_track.assign(observations.size(), 0);
 
-    // Candidate pairs within the match distance, nearest first.
-    std::vector<std::tuple<double, std::uint64_t, std::size_t, std::size_t>> pairs;
-    for (std::size_t t = 0; t < tracks_.size(); ++t)
-        for (std::size_t o = 0; o < observations.size(); ++o) {
-            const double d =
-                static_cast<double>((observations[o].position - tracks_[t].position).norm());
-            if (d <= options_.match_distance) pairs.emplace_back(d, tracks_[t].id, t, o);
-        }
-    std::sort(pairs.begin(), pairs.end());
-    std::vector<bool> track_taken(tracks_.size(), false), object_taken(observations.size(), false);
+    std::vector<Eigen::Vector3f> positions;
+    for (const TrackedObservation& o : observations) positions.push_back(o.position);
+    const std::vector<std::size_t> object_track = match(positions);
+    std::vector<bool> object_taken(observations.size(), false);
     std::vector<std::size_t> track_object(tracks_.size(), observations.size());
-    for (const auto& [d, id, t, o] : pairs) {
-        if (track_taken[t] || object_taken[o]) continue;
-        track_taken[t] = object_taken[o] = true;
-        track_object[t] = o;
-    }
+    for (std::size_t o = 0; o < observations.size(); ++o)
+        if (object_track[o] < tracks_.size()) {
+            object_taken[o] = true;
+            track_object[object_track[o]] = o;
+        }
 
     const double log_floor = std::log(options_.evidence_floor);
     auto observe = [&](std::size_t t, std::size_t o) {
@@ -228,6 +249,7 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
         ++track.frames;
         track.misses = 0;
         track.last_frame = frames_;
+        if (obs.fit) track.fit = obs.fit;
         if (by_models) {
             if (scores[o].empty()) return;
             ++track.evidence_frames;
@@ -294,6 +316,28 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
     }
     ++frames_;
     return result;
+}
+
+TrackedFrame track_frame(const Recognizer& recognizer, ObjectTracker& tracker,
+                         const PointCloud& frame, const SegmentationOptions& segmentation) {
+    SegmentationResult segmented = segment_scene(frame, segmentation);
+    std::vector<std::optional<PriorFit>> priors;
+    if (tracker.options().prior_fits) {
+        std::vector<Eigen::Vector3f> positions;
+        for (const Cluster& c : segmented.clusters)
+            positions.push_back(table_position(segmented.plane_found, segmented.plane, c.centroid));
+        const std::vector<std::size_t> track = tracker.match(positions);
+        for (const std::size_t t : track) {
+            priors.emplace_back();
+            if (t >= tracker.tracks().size() || !tracker.tracks()[t].fit) continue;
+            const FitEvidence& fit = *tracker.tracks()[t].fit;
+            priors.back() = PriorFit{fit.model_id, fit.pose, fit.score};
+        }
+    }
+    TrackedFrame out;
+    out.scene = recognizer.recognize(std::move(segmented), frame, priors);
+    out.update = tracker.update(out.scene);
+    return out;
 }
 
 }  // namespace esf

@@ -192,6 +192,8 @@ void validate(const VerificationOptions& o) {
     if (o.surface_points < 100 || o.surface_points > kMaxModelSurfacePoints)
         fail("surface points must be in [100, " + std::to_string(kMaxModelSurfacePoints) + "]");
     if (!(o.accept_score >= -1.0 && o.accept_score <= 2.0)) fail("accept score must be in [-1, 2]");
+    if (!(o.prior_tolerance >= 0.0 && o.prior_tolerance <= 2.0))
+        fail("prior tolerance must be in [0, 2]");
     if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
         fail("inlier distance must be in (0, 1) m");
     if (!(o.violation_margin > 0.0 && o.violation_margin < 1.0))
@@ -266,19 +268,20 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
 
 PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& prepared, const VerificationOptions& options,
-                  bool free_scale) {
+                  bool free_scale, FitStart start) {
     validate(options);
     if (!view_pose.allFinite()) throw std::invalid_argument("verification: pose is not finite");
     const ModelSurface& surface = model.impl_->surface;
     const NearestPoints& object = prepared.impl_->object;
     const Eigen::Vector3d& centroid = prepared.impl_->centroid;
 
-    // Start: the view's rotation (scale removed), turned towards the object, centred on it.
+    // Start: the view's rotation (scale removed), turned towards the object (a training view's),
+    // centred on it.
     Eigen::Matrix3d rotation = view_pose.topLeftCorner<3, 3>();
     const double view_scale = std::cbrt(std::abs(rotation.determinant()));
     if (!(view_scale > 0.0)) throw std::invalid_argument("verification: singular view pose");
     rotation /= view_scale;
-    rotation = towards(centroid) * rotation;
+    if (start == FitStart::kTrainingView) rotation = towards(centroid) * rotation;
     Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
     pose.topLeftCorner<3, 3>() = rotation;
     {

@@ -424,32 +424,49 @@ Points Recognizer::posed_surface(const Classification& c) const {
     return out;
 }
 
-void Recognizer::verify(Classification& c, const Observation& observation) const {
+void Recognizer::verify(Classification& c, const Observation& observation,
+                        const PriorFit* prior) const {
     if (!verifies() || c.neighbours.empty()) return;
     const VerificationOptions& o = impl_->options.verification;
-    std::vector<std::size_t> picks;
-    std::vector<int> models;
-    for (std::size_t i = 0; i < c.neighbours.size() && picks.size() < o.candidates; ++i) {
-        if (!o.decide_class && c.neighbours[i].class_name != c.class_name) continue;
-        const int model = c.neighbours[i].model_id;
-        if (std::find(models.begin(), models.end(), model) != models.end()) continue;
-        models.push_back(model);
-        picks.push_back(i);
+    // A model the database rescaled (not metric in its catalog) has a guessed size.
+    const auto guessed = [&](int model) {
+        return impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;
+    };
+    std::vector<std::size_t> picks;  // neighbours fitted, each with its fit in `fits`
+    std::vector<PoseFit> fits;
+    const PreparedObservation prepared(observation, o.camera);
+    if (prior && prior->pose.allFinite()) {
+        const auto same = [&](const NeighbourView& n) { return n.model_id == prior->model_id; };
+        const auto it = std::find_if(c.neighbours.begin(), c.neighbours.end(), same);
+        if (it != c.neighbours.end() && (o.decide_class || it->class_name == c.class_name)) {
+            picks.push_back(static_cast<std::size_t>(it - c.neighbours.begin()));
+            fits.push_back(fit_model(*impl_->surface(prior->model_id), prior->pose.cast<double>(),
+                                     prepared, o, guessed(prior->model_id), FitStart::kCameraPose));
+        }
+    }
+    const bool prior_kept = !fits.empty() && fits.front().verified &&
+                            fits.front().fit.score() >= prior->score - o.prior_tolerance;
+    if (!prior_kept) {
+        // The nearest neighbours of distinct models (of the named class unless decide_class).
+        std::vector<std::size_t> candidates;
+        std::vector<int> models;
+        for (std::size_t i = 0; i < c.neighbours.size() && models.size() < o.candidates; ++i) {
+            if (!o.decide_class && c.neighbours[i].class_name != c.class_name) continue;
+            const int model = c.neighbours[i].model_id;
+            if (std::find(models.begin(), models.end(), model) != models.end()) continue;
+            models.push_back(model);
+            candidates.push_back(i);
+        }
+        for (const std::size_t i : candidates) {
+            if (!fits.empty() && fits.back().verified && fits.back().fit.score() >= o.accept_score)
+                break;  // good enough: the farther candidates are not fitted
+            const int model = c.neighbours[i].model_id;
+            picks.push_back(i);
+            fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
+                                     prepared, o, guessed(model)));
+        }
     }
     if (picks.empty()) return;
-    const PreparedObservation prepared(observation, o.camera);
-    std::vector<PoseFit> fits;
-    for (const std::size_t i : picks) {
-        if (!fits.empty() && fits.back().verified && fits.back().fit.score() >= o.accept_score) {
-            picks.resize(fits.size());  // good enough: the farther candidates are not fitted
-            break;
-        }
-        // A model the database rescaled (not metric in its catalog) has a guessed size.
-        const int model = c.neighbours[i].model_id;
-        const bool guessed = impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;
-        fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
-                                 prepared, o, guessed));
-    }
     std::size_t best = 0;
     for (std::size_t j = 1; j < fits.size(); ++j)
         if (fits[j].fit.score() > fits[best].fit.score()) best = j;
@@ -477,7 +494,7 @@ void Recognizer::verify(Classification& c, const Observation& observation) const
 
 SceneRecognition Recognizer::recognize(SegmentationResult segmentation) const {
     SceneRecognition out = recognize_unverified(std::move(segmentation));
-    if (verifies()) verify_objects(out, nullptr);
+    if (verifies()) verify_objects(out, nullptr, {});
     return out;
 }
 
@@ -509,22 +526,33 @@ SceneRecognition Recognizer::recognize_scene(const PointCloud& scene,
 
 SceneRecognition Recognizer::recognize(SegmentationResult segmentation,
                                        const PointCloud& scene) const {
+    return recognize(std::move(segmentation), scene, {});
+}
+
+SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const PointCloud& scene,
+                                       std::span<const std::optional<PriorFit>> priors) const {
+    if (!priors.empty() && priors.size() != segmentation.clusters.size())
+        throw std::invalid_argument("recognize: " + std::to_string(priors.size()) +
+                                    " prior fits for " +
+                                    std::to_string(segmentation.clusters.size()) + " clusters");
     SceneRecognition out = recognize_unverified(std::move(segmentation));
     if (verifies()) {
         // The frame is the free-space witness when it is what the camera model describes.
         const CameraIntrinsics& camera = impl_->options.verification.camera;
         const bool framed = scene.width == static_cast<std::uint32_t>(camera.width) &&
                             scene.height == static_cast<std::uint32_t>(camera.height);
-        verify_objects(out, framed ? &scene : nullptr);
+        verify_objects(out, framed ? &scene : nullptr, priors);
     }
     return out;
 }
 
-void Recognizer::verify_objects(SceneRecognition& scene, const PointCloud* frame) const {
+void Recognizer::verify_objects(SceneRecognition& scene, const PointCloud* frame,
+                                std::span<const std::optional<PriorFit>> priors) const {
     parallel_for(scene.objects.size(), impl_->options.threads, [&](std::size_t i) {
         RecognizedObject& object = scene.objects[i];
         if (!object.classified() || object.cluster.points.size() < 3) return;
-        verify(object.classification, Observation{object.cluster.points, frame});
+        const PriorFit* prior = i < priors.size() && priors[i] ? &*priors[i] : nullptr;
+        verify(object.classification, Observation{object.cluster.points, frame}, prior);
     });
 }
 

@@ -4,7 +4,17 @@
     live_check.py STDOUT [--lines N | --at-most N]
 """
 import json
+import math
 import sys
+
+
+def good_pose(pose) -> bool:
+    """16 finite numbers, row-major, a rigid motion (times a scale) over 0 0 0 1."""
+    if not isinstance(pose, list) or len(pose) != 16:
+        return False
+    if not all(isinstance(x, (int, float)) and math.isfinite(x) for x in pose):
+        return False
+    return pose[12:] == [0, 0, 0, 1]
 
 
 def main() -> int:
@@ -42,7 +52,18 @@ def main() -> int:
             if len(t["position"]) != 3 or not 1 <= t["frames"] <= frame["frame"] + 1:
                 print(f"{path}:{number}: bad track {t}")
                 return 1
+        for t in frame["tracks"]:
+            if "fit" in t and not (good_pose(t["fit"].get("pose")) and t["fit"].get("model")
+                                   and 0 <= t["fit"].get("score", -1) <= 1):
+                print(f"{path}:{number}: a track with a bad fit {t['fit']}")
+                return 1
         for o in frame["objects"]:
+            if "fit" in o and not (good_pose(o.get("pose")) and o.get("model")
+                                   and isinstance(o.get("verified"), bool)
+                                   and set(o["fit"]) == {"inliers", "support", "violations",
+                                                         "rms_mm"}):
+                print(f"{path}:{number}: an object with a bad fit {o}")
+                return 1
             if o["track"] not in ids:
                 print(f"{path}:{number}: object of track {o['track']}, which is not listed")
                 return 1

@@ -38,6 +38,11 @@ if [[ $mode == recording ]]; then
     python3 -c "import json,sys; l=[json.loads(x) for x in open('out.jsonl')];
 sys.exit(0 if any(t['frames'] >= 3 for t in l[-1]['tracks']) else 1)" ||
         fail "no track lasted 3 frames: $(tail -1 out.jsonl)"
+    # Verification: objects carry their fitted model's pose and tracks their last fit.
+    python3 -c "import json,sys; l=[json.loads(x) for x in open('out.jsonl')];
+sys.exit(0 if any('fit' in t for t in l[-1]['tracks']) and
+         any(o.get('verified') for f in l for o in f['objects']) else 1)" ||
+        fail "no verified fit: $(tail -1 out.jsonl)"
     # A named track names its class's best model (generated models are gen_CLASS_NNN).
     python3 -c "import json,sys; l=[json.loads(x) for x in open('out.jsonl')];
 named=[t for f in l for t in f['tracks'] if t['class']];

@@ -85,6 +85,46 @@ TEST(ObjectTracker, SamePlaceSameTrack) {
     EXPECT_FLOAT_EQ(tracker.tracks()[1].position.x(), 0.22f);
 }
 
+TEST(ObjectTracker, MatchSaysWhichTrackAnUpdateWillGive) {
+    esf::ObjectTracker tracker;
+    const std::vector<TrackedObservation> first = {at(0.0f, 0.0f), at(0.2f, 0.0f)};
+    tracker.update(first);
+    ASSERT_EQ(tracker.tracks().size(), 2u);
+    // The second object moved nearer the first track's place than the first object did, but
+    // pairs go nearest first: each keeps its own; the third is new.
+    const std::vector<TrackedObservation> second = {at(0.21f, 0.0f), at(0.01f, 0.0f),
+                                                    at(0.5f, 0.0f)};
+    std::vector<Eigen::Vector3f> positions;
+    for (const TrackedObservation& o : second) positions.push_back(o.position);
+    const std::vector<std::size_t> match = tracker.match(positions);
+    EXPECT_EQ(match, (std::vector<std::size_t>{1, 0, 2}));
+    const std::uint64_t ids[] = {tracker.tracks()[1].id, tracker.tracks()[0].id};
+    const esf::TrackUpdate update = tracker.update(second);
+    EXPECT_EQ(update.object_track[0], ids[0]);
+    EXPECT_EQ(update.object_track[1], ids[1]);
+    EXPECT_EQ(update.born, (std::vector<std::uint64_t>{update.object_track[2]}));
+}
+
+TEST(ObjectTracker, ATrackKeepsItsLastVerifiedFit) {
+    esf::ObjectTracker tracker;
+    TrackedObservation verified = at(0.0f, 0.0f, {}, nearest("mug"));
+    Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();
+    pose(0, 3) = 0.25f;
+    verified.fit = esf::FitEvidence{"mug", "mug_1", 0.8, 3, pose};
+    tracker.update(std::vector<TrackedObservation>{verified});
+    ASSERT_TRUE(tracker.tracks().front().fit.has_value());
+    EXPECT_EQ(tracker.tracks().front().fit->model_id, 3);
+    // A later frame without a fit keeps it; one with a fit replaces it.
+    tracker.update(std::vector<TrackedObservation>{at(0.0f, 0.0f, {}, nearest("mug"))});
+    ASSERT_TRUE(tracker.tracks().front().fit.has_value());
+    EXPECT_EQ(tracker.tracks().front().fit->pose, pose);
+    verified.fit->model_id = 4;
+    tracker.update(std::vector<TrackedObservation>{verified});
+    EXPECT_EQ(tracker.tracks().front().fit->model_id, 4);
+    // Fits do not vote: the fused class is the nearest models' (here the same frames' "mug").
+    EXPECT_EQ(tracker.tracks().front().class_name(), "mug");
+}
+
 TEST(ObjectTracker, FartherThanTheToleranceIsANewObject) {
     esf::ObjectTracker tracker;  // 5 cm
     tracker.update(std::vector<TrackedObservation>{at(0.0f, 0.0f)});

@@ -86,6 +86,41 @@ TEST(FitModel, RecoversThePoseFromAPerturbedView) {
     EXPECT_EQ(fit.scale, 1.0);
 }
 
+TEST(FitModel, ACameraPoseStartKeepsItsRotation) {
+    // A box well off the optical axis (about 18 degrees), and a start 5 degrees from its pose in
+    // this camera: an earlier fit of the same object. Kept as it is, one ICP step lands near the
+    // truth; taken as a training view's (turned towards the object) it starts 20 degrees away.
+    const esf::Mesh box = esf::test::standing_box(0.16, 0.08, 0.22);
+    Eigen::Isometry3d truth = standing_pose(25.0);
+    truth.pretranslate(Eigen::Vector3d(0.25, 0.0, 0.0));
+    const esf::Points seen = render(box, truth);
+    ASSERT_GT(seen.size(), 1000u);
+    Eigen::Matrix4d start = truth.matrix();
+    start.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(5.0 * std::numbers::pi / 180.0, Eigen::Vector3d(1, 0, 1).normalized())
+            .toRotationMatrix() *
+        truth.linear();
+    const esf::ModelSurface surface = esf::sample_model_surface(box, 1.0, 3000, 1);
+    const esf::PreparedModel model(surface);
+    const esf::PreparedObservation observation({seen, nullptr}, esf::CameraIntrinsics::kinect());
+    esf::VerificationOptions one_step;
+    one_step.iterations = 1;
+    const auto error_deg = [&](const esf::PoseFit& f) {
+        return rotation_error_deg(f.model_to_camera.topLeftCorner<3, 3>(), truth.linear());
+    };
+    const esf::PoseFit kept =
+        esf::fit_model(model, start, observation, one_step, false, esf::FitStart::kCameraPose);
+    const esf::PoseFit turned =
+        esf::fit_model(model, start, observation, one_step, false, esf::FitStart::kTrainingView);
+    EXPECT_LT(error_deg(kept), 5.0);
+    EXPECT_GT(error_deg(turned), 2.0 * error_deg(kept)) << error_deg(kept);
+    const esf::PoseFit full =
+        esf::fit_model(model, start, observation, {}, false, esf::FitStart::kCameraPose);
+    EXPECT_LT(error_deg(full), 2.0);
+    EXPECT_LT((full.model_to_camera.topRightCorner<3, 1>() - truth.translation()).norm(), 0.004);
+    EXPECT_TRUE(full.verified);
+}
+
 TEST(FitModel, APreparedModelFitsAsItsSurfaceDoesAndAThinnedCloudStillSupportsIt) {
     const esf::Mesh box = esf::test::standing_box(0.16, 0.08, 0.22);
     const Eigen::Isometry3d truth = standing_pose(25.0);
@@ -184,6 +219,12 @@ TEST(FitModel, RejectsBadInput) {
     bad.accept_score = 3.0;
     EXPECT_THROW(esf::validate(bad), std::invalid_argument);
     bad.accept_score = 2.0;
+    EXPECT_NO_THROW(esf::validate(bad));
+    bad.prior_tolerance = -0.1;
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.prior_tolerance = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.prior_tolerance = 0.0;
     EXPECT_NO_THROW(esf::validate(bad));
 }
 

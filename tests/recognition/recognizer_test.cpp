@@ -185,6 +185,54 @@ TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone)
     fs::remove_all(dir);
 }
 
+TEST_F(RecognizerTest, APriorFitIsKeptWhileItFitsAndOtherwiseOneCandidateMore) {
+    const esf::Points view = held_out_view("mug", kHeldOut[1], 1);
+    esf::RecognizerOptions off;
+    off.verify = false;
+    const esf::Classification unverified = esf::Recognizer(db_path_, off).classify(view);
+    const esf::Recognizer recognizer(db_path_);
+    const esf::Observation observation{view, nullptr};
+    esf::Classification fresh = unverified;
+    recognizer.verify(fresh, observation);
+    ASSERT_TRUE(fresh.verified);
+    ASSERT_EQ(fresh.class_name, "mug");
+
+    // The same object again, its fit the prior: kept, at the pose it had.
+    const esf::PriorFit prior{fresh.best_model_id, fresh.pose, fresh.fit->score()};
+    esf::Classification again = unverified;
+    recognizer.verify(again, observation, &prior);
+    EXPECT_TRUE(again.verified);
+    EXPECT_EQ(again.best_model, fresh.best_model);
+    EXPECT_LT((again.pose.topRightCorner<3, 1>() - fresh.pose.topRightCorner<3, 1>()).norm(),
+              0.002f);
+    EXPECT_GE(again.fit->score(), fresh.fit->score() - 0.05);
+
+    // The bowl from the mug's pose does not fit as the mug did: the candidates are fitted too
+    // and the mug wins as without a prior.
+    const auto bowl =
+        std::find_if(unverified.neighbours.begin(), unverified.neighbours.end(),
+                     [](const esf::NeighbourView& n) { return n.class_name == "bowl"; });
+    ASSERT_NE(bowl, unverified.neighbours.end());
+    const esf::PriorFit wrong{bowl->model_id, fresh.pose, fresh.fit->score()};
+    esf::Classification corrected = unverified;
+    recognizer.verify(corrected, observation, &wrong);
+    EXPECT_EQ(corrected.class_name, "mug");
+    EXPECT_EQ(corrected.best_model, fresh.best_model);
+
+    // A model that is not among the neighbours (none has id 99) is no prior.
+    const esf::PriorFit absent{99, fresh.pose, 1.0};
+    esf::Classification ignored = unverified;
+    recognizer.verify(ignored, observation, &absent);
+    EXPECT_EQ(ignored.best_model, fresh.best_model);
+    EXPECT_EQ(ignored.pose, fresh.pose);
+    EXPECT_EQ(ignored.fit->score(), fresh.fit->score());
+
+    // A scene's priors come one per cluster, or not at all.
+    const std::vector<std::optional<esf::PriorFit>> one_prior(1);
+    EXPECT_THROW(recognizer.recognize(esf::SegmentationResult{}, esf::PointCloud{}, one_prior),
+                 std::invalid_argument);
+}
+
 TEST_F(RecognizerTest, OneNearestNeighbourIsTheNearestViewsClass) {
     esf::RecognizerOptions options;
     options.k = 1;

@@ -56,6 +56,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -84,6 +85,10 @@ struct TrackingOptions {
     double match_distance = 0.05;  ///< metres on the table plane (> 0)
     int max_misses = 5;            ///< frames in a row a track survives unseen (>= 0)
     FusionRule fusion = FusionRule::kNearestModels;
+    /// track_frame(): verification starts from each track's last verified fit (PriorFit), which
+    /// a track's object keeps while it fits (a third of the time per object); false: every
+    /// frame is verified afresh.
+    bool prior_fits = true;
     /// kClassLikelihood: smallest per-frame class probability, in (0, 1) (checked either way).
     double evidence_floor = 0.01;
 };
@@ -125,12 +130,25 @@ struct ModelScore {
 /// nearest first.
 std::vector<ModelScore> model_scores(std::span<const ModelEvidence> models);
 
+/// A frame's verified fit: the model verification aligned to the object, where and how well.
+/// Fusion does not count it (adding each frame's fit score to its model's earnings named fewer
+/// objects right on generated sequences: BENCHMARKS.md); the track keeps the last one as the
+/// start of the next frame's verification (track_frame()).
+struct FitEvidence {
+    std::string class_name;
+    std::string model_name;
+    double score = 0.0;                                  ///< FitScore::score(), floored at 0
+    int model_id = -1;                                   ///< Classification::best_model_id
+    Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();  ///< model -> camera
+};
+
 /// One object of a frame, as the tracker sees it. The rule in use reads its own evidence; when
 /// that is empty the object is seen, but without a class.
 struct TrackedObservation {
     Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< on the table plane, metres
     std::vector<ClassEvidence> evidence;                 ///< kClassLikelihood's
     std::vector<ModelEvidence> models;                   ///< kNearestModels'
+    std::optional<FitEvidence> fit;                      ///< when the object was verified
 };
 
 /// The observations of a recognised scene, in its objects' order.
@@ -159,6 +177,8 @@ struct ObjectTrack {
     std::size_t last_frame = 0;
     /// The classes it has seen, most likely first; empty when it never had evidence.
     std::vector<FusedClass> classes;
+    /// Its last verified fit (of the last frame that had one).
+    std::optional<FitEvidence> fit;
 
     bool has_class() const { return !classes.empty(); }
     const std::string& class_name() const;  ///< classes[0] (empty string when none)
@@ -183,6 +203,9 @@ class ObjectTracker {
     TrackUpdate update(std::span<const TrackedObservation> observations);
     /// scene_observations(scene), then update().
     TrackUpdate update(const SceneRecognition& scene);
+    /// Per position (on the table plane, as TrackedObservation::position), the index in
+    /// tracks() of the track update() would give it, or tracks().size() for a new track.
+    std::vector<std::size_t> match(std::span<const Eigen::Vector3f> positions) const;
 
     /// The live tracks, by id.
     const std::vector<ObjectTrack>& tracks() const { return tracks_; }
@@ -211,5 +234,17 @@ class ObjectTracker {
     std::size_t frames_ = 0;
     std::uint64_t next_id_ = 1;
 };
+
+/// One frame of a stream, recognised and tracked.
+struct TrackedFrame {
+    SceneRecognition scene;
+    TrackUpdate update;
+};
+
+/// segment_scene(frame, segmentation), recognition against the frame (Recognizer::recognize)
+/// with each object's track's last fit as its prior (TrackingOptions::prior_fits), then
+/// tracker.update(). What esf live does with each frame. Throws what those throw.
+TrackedFrame track_frame(const Recognizer& recognizer, ObjectTracker& tracker,
+                         const PointCloud& frame, const SegmentationOptions& segmentation);
 
 }  // namespace esf

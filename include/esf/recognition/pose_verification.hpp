@@ -50,6 +50,10 @@ struct VerificationOptions {
     /// default): every candidate. 0.7 saves a fifth to a quarter of the time and costs a few
     /// cans named box on real views (BENCHMARKS.md).
     double accept_score = 2.0;
+    /// An object's fit from an earlier frame (a track's, PriorFit) is fitted first, from where it
+    /// stood; verified again with a score at most this much below its former one, it is kept and
+    /// no other candidate is fitted (>= 0).
+    double prior_tolerance = 0.1;
     int iterations = 10;                ///< ICP iterations (>= 1)
     std::size_t surface_points = 2000;  ///< samples of each model's surface
     double inlier_distance = 0.004;     ///< metres
@@ -80,6 +84,15 @@ struct PoseFit {
 
 class PreparedModel;
 
+/// Where a fit starts from.
+enum class FitStart {
+    /// A training view's pose (model -> the training camera, which looked at the model's centre):
+    /// its rotation turned towards the object's direction from the camera.
+    kTrainingView,
+    /// A pose in this camera (an earlier fit of the same object): its rotation as it is.
+    kCameraPose,
+};
+
 /// An observation made ready for several hypotheses: its k-d tree and what the sensor saw
 /// (the frame, or the object's outline) are built once. The observation's points and frame
 /// must outlive it. Throws std::invalid_argument for fewer than 3 points or a frame that is not
@@ -93,7 +106,8 @@ class PreparedObservation {
 
   private:
     friend PoseFit fit_model(const PreparedModel&, const Eigen::Matrix4d&,
-                             const PreparedObservation&, const VerificationOptions&, bool);
+                             const PreparedObservation&, const VerificationOptions&, bool,
+                             FitStart);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
@@ -111,7 +125,8 @@ class PreparedModel {
 
   private:
     friend PoseFit fit_model(const PreparedModel&, const Eigen::Matrix4d&,
-                             const PreparedObservation&, const VerificationOptions&, bool);
+                             const PreparedObservation&, const VerificationOptions&, bool,
+                             FitStart);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
@@ -128,9 +143,11 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& observation, const VerificationOptions& options,
                   bool free_scale = false);
-/// The same with a prepared model: what a recognizer uses for many objects.
+/// The same with a prepared model: what a recognizer uses for many objects. With
+/// FitStart::kCameraPose, `view_pose` is a pose in this camera (an earlier fit of the object)
+/// and its rotation is kept as it is; either way the start is centred on the object's points.
 PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& observation, const VerificationOptions& options,
-                  bool free_scale = false);
+                  bool free_scale = false, FitStart start = FitStart::kTrainingView);
 
 }  // namespace esf

@@ -25,6 +25,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -98,6 +99,14 @@ int descriptor_version(const std::string& name);
 /// descriptor, a version or dimension other than this build's, settings of the wrong type or
 /// out of range.
 QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind);
+
+/// A model verified on the same object in an earlier frame (a track's last fit): verification
+/// fits it first, from where it stood (VerificationOptions::prior_tolerance).
+struct PriorFit {
+    int model_id = -1;                                   ///< Classification::best_model_id
+    Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();  ///< Classification::pose then
+    double score = 0.0;                                  ///< its FitScore::score() then
+};
 
 /// What a Recognizer loaded.
 struct RecognizerInfo {
@@ -191,6 +200,11 @@ class Recognizer {
     /// The same for a segmentation of `frame`: verification (when on) checks each hypothesis
     /// against the frame's free space when the frame has the verification camera's size.
     SceneRecognition recognize(SegmentationResult segmentation, const PointCloud& frame) const;
+    /// The same with each object's earlier fit (`priors`: one per cluster, in the segmentation's
+    /// order, or empty), as verify() takes it. Throws std::invalid_argument when `priors` is
+    /// neither empty nor one per cluster.
+    SceneRecognition recognize(SegmentationResult segmentation, const PointCloud& frame,
+                               std::span<const std::optional<PriorFit>> priors) const;
     /// segment_scene() + recognize(). Throws what segment_scene() throws (an empty cloud or one
     /// without finite points, bad options); a scene without plane or objects is no error.
     SceneRecognition recognize_scene(const PointCloud& scene,
@@ -203,7 +217,13 @@ class Recognizer {
     /// its share of the neighbours). Otherwise leaves `c` as it is. Throws esf::IoError naming a
     /// mesh that cannot be loaded or a stored surface that is corrupt, std::invalid_argument for an
     /// observation fit_model refuses.
-    void verify(Classification& c, const Observation& observation) const;
+    ///
+    /// With a `prior` whose model is among the neighbours, that model is fitted first from the
+    /// prior's pose; verified with a score no more than verification.prior_tolerance below the
+    /// prior's, it is the result and no other candidate is fitted (a track's object keeps its
+    /// model while it fits: a third of the time); otherwise it joins the candidates.
+    void verify(Classification& c, const Observation& observation,
+                const PriorFit* prior = nullptr) const;
     /// Verification is on and has the models' surfaces (stored or from verification_meshes).
     bool verifies() const;
     /// The surface samples of the model `c` names, placed where its fit put them (camera frame,
@@ -220,7 +240,8 @@ class Recognizer {
 
   private:
     SceneRecognition recognize_unverified(SegmentationResult segmentation) const;
-    void verify_objects(SceneRecognition& scene, const PointCloud* frame) const;
+    void verify_objects(SceneRecognition& scene, const PointCloud* frame,
+                        std::span<const std::optional<PriorFit>> priors) const;
 
     struct Impl;
     std::unique_ptr<Impl> impl_;
