@@ -10,13 +10,19 @@ namespace esf::cli {
 void add_depth_png_options(CLI::App& cmd, SceneInputArgs& args) {
     cmd.add_flag("--depth-png", args.depth_png,
                  "Read scenes as 16-bit depth PNGs (implied by the .png extension)");
-    cmd.add_option("--fx", args.intrinsics.fx, "Depth PNG: focal length x (pixels)")
+    cmd.add_option("--fx", args.intrinsics.fx,
+                   "Depth PNG, or a cloud that is a depth image's points: focal length x (pixels)")
         ->capture_default_str();
-    cmd.add_option("--fy", args.intrinsics.fy, "Depth PNG: focal length y (pixels)")
+    cmd.add_option("--fy", args.intrinsics.fy,
+                   "Depth PNG, or a cloud that is a depth image's points: focal length y (pixels)")
         ->capture_default_str();
-    cmd.add_option("--cx", args.intrinsics.cx, "Depth PNG: principal point x (pixels)")
+    cmd.add_option(
+           "--cx", args.intrinsics.cx,
+           "Depth PNG, or a cloud that is a depth image's points: principal point x (pixels)")
         ->capture_default_str();
-    cmd.add_option("--cy", args.intrinsics.cy, "Depth PNG: principal point y (pixels)")
+    cmd.add_option(
+           "--cy", args.intrinsics.cy,
+           "Depth PNG, or a cloud that is a depth image's points: principal point y (pixels)")
         ->capture_default_str();
     cmd.add_option("--depth-scale", args.depth_scale,
                    "Depth PNG: metres per unit (0.001 = millimetres; 0.0002 for 5000 per metre)")
@@ -72,12 +78,20 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
     cmd.add_option("--max-cluster-points", o.max_cluster_points,
                    "Larger clusters are dropped (points)")
         ->capture_default_str();
+    cmd.add_flag("--keep-unorganised", args.keep_unorganised,
+                 "Segment an unorganised cloud as it is, also when its points are a depth "
+                 "image's (each on its own pixel of --fx --fy --cx --cy, 640 x 480: by default "
+                 "it is then segmented as that image)");
     add_seed_option(cmd, o.seed, "RANSAC seed");
 }
 
 SegmentationOptions segmentation_options(const SceneInputArgs& args) {
     SegmentationOptions options = args.segmentation;
     options.viewpoint = {args.viewpoint[0], args.viewpoint[1], args.viewpoint[2]};
+    if (args.keep_unorganised)
+        options.image_camera.reset();
+    else
+        options.image_camera = args.intrinsics;
     validate(options);
     return options;
 }

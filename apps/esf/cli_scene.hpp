@@ -15,7 +15,8 @@ namespace esf::cli {
 
 struct SceneInputArgs {
     bool depth_png = false;
-    CameraIntrinsics intrinsics;
+    CameraIntrinsics intrinsics;  ///< of depth PNGs, and of clouds that are a depth image's points
+    bool keep_unorganised = false;
     double depth_scale = 0.001;
     SegmentationOptions segmentation;
     std::vector<float> viewpoint = {0.0f, 0.0f, 0.0f};

@@ -537,11 +537,14 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
                                     std::to_string(segmentation.clusters.size()) + " clusters");
     SceneRecognition out = recognize_unverified(std::move(segmentation));
     if (verifies()) {
-        // The frame is the free-space witness when it is what the camera model describes.
+        // The frame is the free-space witness when it is what the camera model describes: its
+        // image, or a cloud that is that image's points (depth_image_of).
         const CameraIntrinsics& camera = impl_->options.verification.camera;
         const bool framed = scene.width == static_cast<std::uint32_t>(camera.width) &&
                             scene.height == static_cast<std::uint32_t>(camera.height);
-        verify_objects(out, framed ? &scene : nullptr, priors);
+        std::optional<PointCloud> image;
+        if (!framed && !scene.organised()) image = depth_image_of(scene.points, camera);
+        verify_objects(out, framed ? &scene : image ? &*image : nullptr, priors);
     }
     return out;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -60,6 +61,36 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     if (points.size() > std::numeric_limits<std::uint32_t>::max())
         throw std::invalid_argument("segment_scene: more than 2^32 - 1 points");
     const bool organised = height > 1 && static_cast<std::size_t>(width) * height == points.size();
+
+    if (!organised && height == 1 && options.image_camera) {
+        // A depth image with its invalid pixels dropped: segmented as the image, the clusters
+        // then mapped back to the input's indices and order.
+        std::vector<std::uint32_t> source;
+        if (const std::optional<PointCloud> image =
+                depth_image_of(points, *options.image_camera, &source)) {
+            SegmentationResult result =
+                segment(image->points, image->width, image->height, options);
+            result.finite_points = 0;
+            for (const Eigen::Vector3f& p : points) result.finite_points += p.allFinite();
+            for (Cluster& cluster : result.clusters) {
+                for (std::uint32_t& index : cluster.indices) index = source[index];
+                std::vector<std::size_t> order(cluster.indices.size());
+                std::iota(order.begin(), order.end(), std::size_t{0});
+                std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+                    return cluster.indices[a] < cluster.indices[b];
+                });
+                std::vector<std::uint32_t> indices(order.size());
+                Points in_order(order.size());
+                for (std::size_t k = 0; k < order.size(); ++k) {
+                    indices[k] = cluster.indices[order[k]];
+                    in_order[k] = cluster.points[order[k]];
+                }
+                cluster.indices = std::move(indices);
+                cluster.points = std::move(in_order);
+            }
+            return result;
+        }
+    }
 
     std::vector<std::uint32_t> finite;
     finite.reserve(points.size());
@@ -320,6 +351,11 @@ void validate(const SegmentationOptions& o) {
             fail(std::string(name) + " must be a positive length in metres, got " +
                  std::to_string(value));
     };
+    if (o.image_camera) {
+        o.image_camera->validate();
+        if (static_cast<std::size_t>(o.image_camera->width) * o.image_camera->height > (1u << 25))
+            fail("image_camera must have at most 2^25 pixels");
+    }
     positive(o.plane_distance, "plane_distance");
     positive(o.cluster_tolerance, "cluster_tolerance");
     positive(o.max_height, "max_height");
@@ -356,6 +392,43 @@ SegmentationResult segment_scene(const PointCloud& cloud, const SegmentationOpti
 SegmentationResult segment_scene(std::span<const Eigen::Vector3f> points,
                                  const SegmentationOptions& options) {
     return segment(points, static_cast<std::uint32_t>(points.size()), 1, options);
+}
+
+std::optional<PointCloud> depth_image_of(std::span<const Eigen::Vector3f> points,
+                                         const CameraIntrinsics& camera,
+                                         std::vector<std::uint32_t>* source_out) {
+    camera.validate();
+    std::vector<std::uint32_t> own;
+    std::vector<std::uint32_t>& source = source_out ? *source_out : own;
+    constexpr double kTolerance = 0.01;  // pixels
+    const std::size_t pixels = static_cast<std::size_t>(camera.width) * camera.height;
+    source.assign(pixels, kNoPoint);
+    std::size_t finite = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Eigen::Vector3f& p = points[i];
+        if (!p.allFinite()) continue;
+        if (!(p.z() > 0.0f)) return std::nullopt;
+        const double u = camera.fx * p.x() / p.z() + camera.cx;
+        const double v = camera.fy * p.y() / p.z() + camera.cy;
+        const double column = std::round(u), row = std::round(v);
+        if (std::abs(u - column) > kTolerance || std::abs(v - row) > kTolerance || column < 0.0 ||
+            row < 0.0 || column >= camera.width || row >= camera.height)
+            return std::nullopt;
+        const std::size_t pixel =
+            static_cast<std::size_t>(row) * camera.width + static_cast<std::size_t>(column);
+        if (source[pixel] != kNoPoint) return std::nullopt;
+        source[pixel] = static_cast<std::uint32_t>(i);
+        ++finite;
+    }
+    if (finite < 3) return std::nullopt;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    PointCloud image;
+    image.points.assign(pixels, Eigen::Vector3f(nan, nan, nan));
+    image.width = static_cast<std::uint32_t>(camera.width);
+    image.height = static_cast<std::uint32_t>(camera.height);
+    for (std::size_t pixel = 0; pixel < pixels; ++pixel)
+        if (source[pixel] != kNoPoint) image.points[pixel] = points[source[pixel]];
+    return image;
 }
 
 }  // namespace esf

@@ -438,6 +438,12 @@ TEST(Segmentation, RejectsEmptyInputAndBadOptions) {
     o = {};
     o.viewpoint.x() = nan;
     EXPECT_NE(message(some, o).find("viewpoint must be finite"), std::string::npos);
+    o = {};
+    o.image_camera = esf::CameraIntrinsics{525.0, 525.0, 319.5, 239.5, 16384, 16384};
+    EXPECT_NE(message(some, o).find("image_camera must have at most 2^25 pixels"),
+              std::string::npos);
+    o.image_camera->width = 0;
+    EXPECT_NE(message(some, o).find("camera size must be in"), std::string::npos);
 
     // Object coordinates beyond the clustering grid (2^20 cells of 1 mm / sqrt(3) = 605 m).
     Scene far;
@@ -487,11 +493,87 @@ TEST(Segmentation, DepthImageEndToEnd) {
     EXPECT_EQ(border.message, "may be cut off: touches the image border");
     EXPECT_STREQ(esf::to_string(border.status), "maybe_truncated");
 
-    // The same points without the organised layout: no border test.
-    const esf::SegmentationResult flat = esf::segment_scene(cloud.points);
+    // The same points without the organised layout, kept unorganised: no border test.
+    esf::SegmentationOptions unorganised;
+    unorganised.image_camera.reset();
+    const esf::SegmentationResult flat = esf::segment_scene(cloud.points, unorganised);
     ASSERT_EQ(flat.clusters.size(), 2u);
     EXPECT_EQ(flat.clusters[1].status, esf::ClusterStatus::kOk);
     EXPECT_EQ(flat.clusters[1].indices, border.indices);
+
+    // Its finite points alone (the missing pixels dropped, as a cloud saved without NaNs): by
+    // default they are the image again, segmented as it was, with indices into the finite list.
+    esf::Points finite;
+    std::vector<std::uint32_t> pixel_of;
+    for (std::size_t i = 0; i < cloud.points.size(); ++i)
+        if (cloud.points[i].allFinite()) {
+            finite.push_back(cloud.points[i]);
+            pixel_of.push_back(static_cast<std::uint32_t>(i));
+        }
+    ASSERT_LT(finite.size(), cloud.points.size());
+    const esf::SegmentationResult dropped = esf::segment_scene(finite);
+    EXPECT_EQ(dropped.finite_points, finite.size());
+    EXPECT_EQ(dropped.plane_inliers, result.plane_inliers);
+    ASSERT_EQ(dropped.clusters.size(), result.clusters.size());
+    for (std::size_t k = 0; k < result.clusters.size(); ++k) {
+        const esf::Cluster& c = dropped.clusters[k];
+        EXPECT_EQ(c.status, result.clusters[k].status);
+        EXPECT_EQ(c.centroid, result.clusters[k].centroid);
+        ASSERT_EQ(c.indices.size(), result.clusters[k].indices.size());
+        for (std::size_t i = 0; i < c.indices.size(); ++i) {
+            EXPECT_EQ(pixel_of[c.indices[i]], result.clusters[k].indices[i]);
+            EXPECT_EQ(c.points[i], finite[c.indices[i]]);
+        }
+    }
+    esf::SegmentationOptions kinect_ish;  // another camera: the points do not fall on its pixels
+    kinect_ish.image_camera = esf::CameraIntrinsics{570.3, 570.3, 319.5, 239.5};
+    EXPECT_EQ(esf::segment_scene(finite, kinect_ish).clusters[1].status, esf::ClusterStatus::kOk);
+}
+
+TEST(Segmentation, DepthImageOfPointsOnTheirOwnPixelsOnly) {
+    const esf::CameraIntrinsics camera{100.0, 100.0, 9.5, 7.5, 20, 16};
+    // Three points on pixels (2, 3), (10, 5) and (19, 15), at various depths.
+    const auto on_pixel = [&](double u, double v, double z) {
+        return Eigen::Vector3f(static_cast<float>((u - camera.cx) * z / camera.fx),
+                               static_cast<float>((v - camera.cy) * z / camera.fy),
+                               static_cast<float>(z));
+    };
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    esf::Points points = {on_pixel(10, 5, 1.0), Eigen::Vector3f(nan, 0, 0), on_pixel(2, 3, 0.5),
+                          on_pixel(19, 15, 2.0)};
+    std::vector<std::uint32_t> source;
+    const std::optional<esf::PointCloud> image = esf::depth_image_of(points, camera, &source);
+    ASSERT_TRUE(image.has_value());
+    EXPECT_EQ(image->width, 20u);
+    EXPECT_EQ(image->height, 16u);
+    ASSERT_EQ(source.size(), 320u);
+    EXPECT_EQ(source[5 * 20 + 10], 0u);
+    EXPECT_EQ(source[3 * 20 + 2], 2u);
+    EXPECT_EQ(source[15 * 20 + 19], 3u);
+    EXPECT_EQ(source[0], esf::kNoPoint);
+    EXPECT_EQ(image->points[3 * 20 + 2], points[2]);
+    std::size_t finite = 0;
+    for (const Eigen::Vector3f& p : image->points) finite += p.allFinite();
+    EXPECT_EQ(finite, 3u);
+
+    auto refused = [&](esf::Points changed) {
+        return !esf::depth_image_of(changed, camera).has_value();
+    };
+    esf::Points off = points;  // a tenth of a pixel off its centre
+    off[0] = on_pixel(10.1, 5, 1.0);
+    EXPECT_TRUE(refused(off));
+    esf::Points twice = points;  // two points on one pixel
+    twice.push_back(on_pixel(2, 3, 0.7));
+    EXPECT_TRUE(refused(twice));
+    esf::Points outside = points;
+    outside.push_back(on_pixel(20, 3, 1.0));
+    EXPECT_TRUE(refused(outside));
+    esf::Points behind = points;
+    behind.push_back(Eigen::Vector3f(0.0f, 0.0f, -1.0f));
+    EXPECT_TRUE(refused(behind));
+    EXPECT_TRUE(refused({points[0], points[2]}));  // fewer than 3
+    EXPECT_THROW(esf::depth_image_of(points, esf::CameraIntrinsics{-1.0, 1.0, 0.0, 0.0}),
+                 std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -598,14 +680,34 @@ TEST(SegmentationRealScenes, OrganisedHullFromRowEndsEqualsTheFullHull) {
         esf::SegmentationOptions options;
         options.grouping = esf::Grouping::kEuclidean;
         const esf::SegmentationResult organised = esf::segment_scene(cloud, options);
+        esf::SegmentationOptions unorganised = options;
+        unorganised.image_camera.reset();
         const esf::SegmentationResult flat = esf::segment_scene(
-            std::span<const Eigen::Vector3f>(cloud.points.data(), cloud.points.size()), options);
+            std::span<const Eigen::Vector3f>(cloud.points.data(), cloud.points.size()),
+            unorganised);
         EXPECT_EQ(organised.plane_inliers, flat.plane_inliers) << name;
         ASSERT_EQ(organised.clusters.size(), flat.clusters.size()) << name;
         ASSERT_GT(organised.clusters.size(), 0u) << name;
         for (std::size_t k = 0; k < flat.clusters.size(); ++k)
             EXPECT_EQ(organised.clusters[k].indices, flat.clusters[k].indices) << name << " " << k;
     }
+}
+
+TEST(SegmentationRealScenes, AKinectCloudSavedWithoutItsInvalidPixelsIsSegmentedAsItsImage) {
+    // mOSD's test scene 56 is stored as its finite points only (165114 of 640 x 480): a pile of
+    // boxes, cans and a bowl. Segmented as the Kinect image they were, far more of its objects
+    // come out as one cluster each than from the voxel patches of an unorganised cloud.
+    ESF_REQUIRE_DATA("real/scenes/mosd_test56.pcd");
+    const esf::PointCloud cloud = load_scene("real/scenes/mosd_test56.pcd");
+    ASSERT_FALSE(cloud.organised());
+    ASSERT_TRUE(esf::depth_image_of(cloud.points, esf::CameraIntrinsics::kinect()).has_value());
+    esf::SegmentationOptions unorganised;
+    unorganised.image_camera.reset();
+    const SceneScore as_image = score(cloud, esf::segment_scene(cloud));
+    const SceneScore as_cloud = score(cloud, esf::segment_scene(cloud, unorganised));
+    EXPECT_EQ(as_image.objects, as_cloud.objects);
+    EXPECT_GE(as_image.found, as_cloud.found + 5)
+        << as_image.found << " and " << as_cloud.found << " of " << as_image.objects;
 }
 
 TEST(SegmentationRealScenes, SameResultOnOneAndTwoThreads) {

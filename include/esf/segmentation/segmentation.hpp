@@ -27,6 +27,10 @@
 //      kEuclidean: two candidates belong to one cluster when a chain of candidates links them
 //      with steps of at most `cluster_tolerance` (the clusters of PCL's
 //      EuclideanClusterExtraction, found on a hash grid instead of a k-d tree);
+//   0. an unorganised cloud whose finite points are a depth image's (each within 0.01 pixel of
+//      its own pixel centre of `image_camera`, as when the invalid pixels of a frame were
+//      dropped) is segmented as that image, so that the organised steps apply; its clusters'
+//      indices and points still refer to the input, in its order;
 //   6. clusters with fewer than `min_cluster_points` or more than `max_cluster_points`
 //      full-resolution points are dropped; the others are sorted by point count (descending),
 //      then by centroid x, y, z.
@@ -36,10 +40,12 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "esf/core/camera.hpp"
 #include "esf/core/enum_names.hpp"
 #include "esf/core/point_cloud.hpp"
 #include "esf/segmentation/convexity_grouping.hpp"
@@ -102,6 +108,9 @@ struct SegmentationOptions {
     float cluster_tolerance = 0.02f;           ///< m; largest gap inside one object
     std::size_t min_cluster_points = 100;      ///< full-resolution points, >= 1
     std::size_t max_cluster_points = 1000000;  ///< full-resolution points
+    /// The camera an unorganised cloud may be the depth image of (step 0, above); std::nullopt:
+    /// unorganised clouds stay unorganised.
+    std::optional<CameraIntrinsics> image_camera = CameraIntrinsics::kinect();
     // Execution.
     std::uint64_t seed = 0;  ///< RANSAC seed
     int threads = 0;         ///< 0 = all cores
@@ -158,6 +167,19 @@ struct SegmentationResult {
 
 /// Throws std::invalid_argument when an option is out of range.
 void validate(const SegmentationOptions& options);
+
+/// Marks a pixel of depth_image_of()'s `source` that no point lies on.
+inline constexpr std::uint32_t kNoPoint = 0xffffffffu;
+
+/// The depth image (organised, camera.width x camera.height) whose finite points `points` are:
+/// each finite point within 0.01 pixel of its own pixel centre of `camera` (in front of it,
+/// inside the image, no two on one pixel), the other pixels NaN; what is left of a depth frame
+/// whose invalid pixels were dropped. `source`, when given, gets each pixel's index in `points`
+/// (kNoPoint where none). std::nullopt when a finite point breaks the rule or fewer than 3 are
+/// finite. Throws std::invalid_argument for a camera that CameraIntrinsics::validate() refuses.
+std::optional<PointCloud> depth_image_of(std::span<const Eigen::Vector3f> points,
+                                         const CameraIntrinsics& camera,
+                                         std::vector<std::uint32_t>* source = nullptr);
 
 /// Segments a cloud; organised clouds (height > 1) also flag clusters touching the image border.
 /// Throws std::invalid_argument for an empty cloud, a cloud without finite points, bad options
