@@ -411,8 +411,8 @@ std::optional<PointCloud> depth_image_of(std::span<const Eigen::Vector3f> points
         const double u = camera.fx * p.x() / p.z() + camera.cx;
         const double v = camera.fy * p.y() / p.z() + camera.cy;
         const double column = std::round(u), row = std::round(v);
-        if (std::abs(u - column) > kTolerance || std::abs(v - row) > kTolerance || column < 0.0 ||
-            row < 0.0 || column >= camera.width || row >= camera.height)
+        if (!(std::abs(u - column) <= kTolerance && std::abs(v - row) <= kTolerance) ||
+            column < 0.0 || row < 0.0 || column >= camera.width || row >= camera.height)
             return std::nullopt;
         const std::size_t pixel =
             static_cast<std::size_t>(row) * camera.width + static_cast<std::size_t>(column);

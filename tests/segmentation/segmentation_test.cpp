@@ -571,6 +571,9 @@ TEST(Segmentation, DepthImageOfPointsOnTheirOwnPixelsOnly) {
     esf::Points behind = points;
     behind.push_back(Eigen::Vector3f(0.0f, 0.0f, -1.0f));
     EXPECT_TRUE(refused(behind));
+    esf::Points huge = points;  // projects to infinity
+    huge.push_back(Eigen::Vector3f(1e38f, 0.0f, 1e-38f));
+    EXPECT_TRUE(refused(huge));
     EXPECT_TRUE(refused({points[0], points[2]}));  // fewer than 3
     EXPECT_THROW(esf::depth_image_of(points, esf::CameraIntrinsics{-1.0, 1.0, 0.0, 0.0}),
                  std::invalid_argument);
