@@ -50,6 +50,11 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
         ->capture_default_str();
     cmd.add_option("--max-height", o.max_height, "Objects end this high above the plane (m)")
         ->capture_default_str();
+    cmd.add_option("--rim-height", o.rim_height,
+                   "Organised frames: objects grow down to their rims below --min-height, above "
+                   "this and one Kinect disparity step (3.2 mm at 1 m) over the plane (m; "
+                   "--min-height or more: off)")
+        ->capture_default_str();
     cmd.add_option("--viewpoint", args.viewpoint,
                    "Sensor position x y z in the cloud's frame (m); its side of the plane is up")
         ->expected(3)

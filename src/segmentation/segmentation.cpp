@@ -54,6 +54,53 @@ std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& n
     return {u, w};
 }
 
+/// Step 6b (organised frames): each cluster takes in the pixels next to it, repeatedly, that
+/// stand below min_height but above the rim floor, without a depth step from the pixel they
+/// grow from; pixels go to the cluster that reaches them first (breadth first from every
+/// cluster's pixels in cluster order). Each cluster's indices stay ascending.
+void grow_rims(std::span<const Eigen::Vector3f> points, std::uint32_t width, std::uint32_t height,
+               const Plane& plane, const SegmentationOptions& options,
+               std::vector<Cluster>& clusters) {
+    constexpr float kMaxStep = 0.01f;  // m of depth between neighbouring pixels of one surface
+    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::uint32_t> owner(points.size(), kNone), queue;
+    for (std::uint32_t c = 0; c < clusters.size(); ++c)
+        for (const std::uint32_t i : clusters[c].indices) {
+            owner[i] = c;
+            queue.push_back(i);
+        }
+    std::vector<std::vector<std::uint32_t>> grown(clusters.size());
+    for (std::size_t head = 0; head < queue.size(); ++head) {
+        const std::uint32_t i = queue[head];
+        const std::uint32_t row = i / width, col = i % width;
+        const std::array<std::uint32_t, 4> next = {
+            row > 0 ? i - width : i, row + 1 < height ? i + width : i, col > 0 ? i - 1 : i,
+            col + 1 < width ? i + 1 : i};
+        for (const std::uint32_t j : next) {
+            if (j == i || owner[j] != kNone || !points[j].allFinite()) continue;
+            const float range = (points[j] - options.viewpoint).norm();
+            const float floor = std::max(options.rim_height, options.rim_noise * range * range);
+            const float h = plane.height(points[j]);
+            if (!(h > floor && h <= options.min_height)) continue;
+            if ((points[j] - options.viewpoint).norm() - (points[i] - options.viewpoint).norm() >
+                    kMaxStep ||
+                (points[i] - options.viewpoint).norm() - range > kMaxStep)
+                continue;
+            owner[j] = owner[i];
+            grown[owner[i]].push_back(j);
+            queue.push_back(j);
+        }
+    }
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+        if (grown[c].empty()) continue;
+        std::vector<std::uint32_t>& indices = clusters[c].indices;
+        indices.insert(indices.end(), grown[c].begin(), grown[c].end());
+        std::sort(indices.begin(), indices.end());
+        clusters[c].points.clear();
+        for (const std::uint32_t i : indices) clusters[c].points.push_back(points[i]);
+    }
+}
+
 SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_t width,
                            std::uint32_t height, const SegmentationOptions& options) {
     validate(options);
@@ -289,6 +336,9 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
         clusters[cluster].points.push_back(candidate_points[k]);
     }
 
+    if (organised && options.rim_height < options.min_height)
+        grow_rims(points, width, height, plane, options, clusters);
+
     parallel_for(clusters.size(), options.threads, [&](std::size_t c) {
         Cluster& cluster = clusters[c];
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -359,6 +409,10 @@ void validate(const SegmentationOptions& o) {
     positive(o.plane_distance, "plane_distance");
     positive(o.cluster_tolerance, "cluster_tolerance");
     positive(o.max_height, "max_height");
+    if (!(o.rim_height >= 0.0f && std::isfinite(o.rim_height)))
+        fail("rim_height must be >= 0, got " + std::to_string(o.rim_height));
+    if (!(o.rim_noise >= 0.0f && std::isfinite(o.rim_noise)))
+        fail("rim_noise must be >= 0, got " + std::to_string(o.rim_noise));
     if (o.plane_iterations < 1)
         fail("plane_iterations must be >= 1, got " + std::to_string(o.plane_iterations));
     if (o.plane_samples < 3)

@@ -439,6 +439,12 @@ TEST(Segmentation, RejectsEmptyInputAndBadOptions) {
     o.viewpoint.x() = nan;
     EXPECT_NE(message(some, o).find("viewpoint must be finite"), std::string::npos);
     o = {};
+    o.rim_height = -0.001f;
+    EXPECT_NE(message(some, o).find("rim_height must be >= 0"), std::string::npos);
+    o = {};
+    o.rim_noise = nan;
+    EXPECT_NE(message(some, o).find("rim_noise must be >= 0"), std::string::npos);
+    o = {};
     o.image_camera = esf::CameraIntrinsics{525.0, 525.0, 319.5, 239.5, 16384, 16384};
     EXPECT_NE(message(some, o).find("image_camera must have at most 2^25 pixels"),
               std::string::npos);
@@ -530,6 +536,38 @@ TEST(Segmentation, DepthImageEndToEnd) {
     EXPECT_EQ(esf::segment_scene(finite, kinect_ish).clusters[1].status, esf::ClusterStatus::kOk);
 }
 
+TEST(Segmentation, ClustersGrowDownToTheirRimsAboveTheNoise) {
+    // Looking straight down at a table 1 m away: a block 1 cm high (60 x 80 pixels) with a rim
+    // 5 mm high around it (2 pixels wide), and beyond the rim a ring 2 mm high. The rim is below
+    // min_height (7.5 mm) but above the noise floor (max(3 mm, 3.2 mm r^2) = 3.2 mm at 1 m): it
+    // joins the block; the ring, at the table's noise, does not.
+    esf::DepthImage image{640, 480, std::vector<std::uint16_t>(640 * 480, 1000)};
+    const auto fill = [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t u0, std::uint32_t u1,
+                          std::uint16_t depth) {
+        for (std::uint32_t v = v0; v < v1; ++v)
+            for (std::uint32_t u = u0; u < u1; ++u) image.depth[v * 640 + u] = depth;
+    };
+    fill(194, 266, 294, 386, 998);  // the ring
+    fill(196, 264, 296, 384, 995);  // the rim
+    fill(198, 262, 298, 382, 990);  // the block
+    const esf::PointCloud cloud = esf::depth_to_cloud(image);
+    const esf::SegmentationResult grown = esf::segment_scene(cloud);
+    ASSERT_EQ(grown.clusters.size(), 1u) << grown.message;
+    EXPECT_EQ(grown.clusters[0].points.size(), 68u * 88u);
+    EXPECT_TRUE(std::is_sorted(grown.clusters[0].indices.begin(), grown.clusters[0].indices.end()));
+    esf::SegmentationOptions off;
+    off.rim_height = off.min_height;
+    const esf::SegmentationResult cut = esf::segment_scene(cloud, off);
+    ASSERT_EQ(cut.clusters.size(), 1u);
+    EXPECT_EQ(cut.clusters[0].points.size(), 64u * 84u);
+    // A rim 5 mm high seen from 1.5 m is within one disparity step (7.2 mm there): not grown.
+    esf::DepthImage far = image;
+    for (std::uint16_t& d : far.depth) d = static_cast<std::uint16_t>(d + 500);
+    const esf::SegmentationResult at_far = esf::segment_scene(esf::depth_to_cloud(far));
+    ASSERT_EQ(at_far.clusters.size(), 1u);
+    EXPECT_EQ(at_far.clusters[0].points.size(), 64u * 84u);
+}
+
 TEST(Segmentation, DepthImageOfPointsOnTheirOwnPixelsOnly) {
     const esf::CameraIntrinsics camera{100.0, 100.0, 9.5, 7.5, 20, 16};
     // Three points on pixels (2, 3), (10, 5) and (19, 15), at various depths.
@@ -618,7 +656,8 @@ SceneScore score(const esf::PointCloud& cloud, const esf::SegmentationResult& re
 void expect_sane(const esf::SegmentationResult& result, const char* name) {
     for (const esf::Cluster& c : result.clusters) {
         EXPECT_GE(c.points.size(), 100u) << name;
-        EXPECT_GT(result.plane.height(c.centroid), 0.01f) << name;
+        // Above the table's noise (clusters reach down to their rims, 3 mm and more).
+        EXPECT_GT(result.plane.height(c.centroid), 0.005f) << name;
         EXPECT_LE(c.size.z(), 0.4f + 1e-6f) << name;
         EXPECT_GE(c.size.x(), c.size.y()) << name;
     }
@@ -682,6 +721,7 @@ TEST(SegmentationRealScenes, OrganisedHullFromRowEndsEqualsTheFullHull) {
         const esf::PointCloud cloud = load_scene(name);
         esf::SegmentationOptions options;
         options.grouping = esf::Grouping::kEuclidean;
+        options.rim_height = options.min_height;  // rims grow in organised frames only
         const esf::SegmentationResult organised = esf::segment_scene(cloud, options);
         esf::SegmentationOptions unorganised = options;
         unorganised.image_camera.reset();

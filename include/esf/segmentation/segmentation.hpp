@@ -32,7 +32,8 @@
 //      dropped) is segmented as that image, so that the organised steps apply; its clusters'
 //      indices and points still refer to the input, in its order;
 //   6. clusters with fewer than `min_cluster_points` or more than `max_cluster_points`
-//      full-resolution points are dropped; the others are sorted by point count (descending),
+//      full-resolution points are dropped; in organised frames the others grow down to their
+//      rims below `min_height` (`rim_height`); they are sorted by point count (descending),
 //      then by centroid x, y, z.
 //
 // Results are identical for every thread count. segment_scene() is re-entrant.
@@ -90,6 +91,14 @@ struct SegmentationOptions {
     /// (chosen on generated scenes and real fold 0/2, BENCHMARKS.md).
     float min_height = 0.0075f;
     float max_height = 0.40f;  ///< m above the plane where objects end (higher points ignored)
+    /// Organised frames: a cluster then takes in the pixels next to it (repeatedly, without a
+    /// depth step of more than 1 cm) that stand below min_height but above max(rim_height,
+    /// rim_noise r^2), r the pixel's distance from the viewpoint in metres: an object's lowest
+    /// rim, which min_height cuts off (a lying can's underside), above the sensor's noise on the
+    /// table (rim_noise: one disparity step of a Kinect v1, 3.2 mm at 1 m). rim_height >=
+    /// min_height: off. Chosen on generated scenes and real fold 0 (BENCHMARKS.md).
+    float rim_height = 0.003f;
+    float rim_noise = 0.0032f;  ///< m per square metre of range
     /// Sensor position in the cloud's frame: its side of the plane is "above".
     Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
     // Grouping.
