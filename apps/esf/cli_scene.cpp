@@ -50,6 +50,10 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
         ->capture_default_str();
     cmd.add_option("--max-height", o.max_height, "Objects end this high above the plane (m)")
         ->capture_default_str();
+    cmd.add_option("--hull-margin", o.hull_margin,
+                   "Points within this of the visible table's hull stand on the table too (m; "
+                   "the hull misses what a large object hides behind it)")
+        ->capture_default_str();
     cmd.add_option("--rim-height", o.rim_height,
                    "Organised frames: objects grow down to their rims below --min-height, above "
                    "this and one Kinect disparity step (3.2 mm at 1 m) over the plane (m; "

@@ -54,6 +54,19 @@ std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& n
     return {u, w};
 }
 
+/// Distance from q to the closed polygon `polygon` (its edges).
+float distance_to_polygon(const std::vector<Vec2>& polygon, const Vec2& q) {
+    float nearest = std::numeric_limits<float>::infinity();
+    for (std::size_t e = 0; e < polygon.size(); ++e) {
+        const Vec2& a = polygon[e];
+        const Vec2 ab = polygon[(e + 1) % polygon.size()] - a;
+        const float length = ab.squaredNorm();
+        const float t = length > 0.0f ? std::clamp((q - a).dot(ab) / length, 0.0f, 1.0f) : 0.0f;
+        nearest = std::min(nearest, (a + t * ab - q).norm());
+    }
+    return nearest;
+}
+
 /// Step 6b (organised frames): each cluster takes in the pixels next to it, repeatedly, that
 /// stand below min_height but above the rim floor, without a depth step from the pixel they
 /// grow from; pixels go to the cluster that reaches them first (breadth first from every
@@ -250,14 +263,19 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     }
     result.plane_found = true;
 
-    // Keep the candidates whose projection lies inside the hull (the polygonal prism).
+    // Keep the candidates whose projection lies inside the hull (the polygonal prism), or within
+    // hull_margin of it.
     const ConvexRegion table(hull);
     std::vector<std::uint8_t> keep(candidates.size());
     parallel_for(kChunks, options.threads, [&](std::size_t c) {
         for (std::size_t k = chunk_begin(c, candidates.size());
              k < chunk_begin(c + 1, candidates.size()); ++k) {
             const Eigen::Vector3f& p = points[candidates[k]];
-            keep[k] = table.contains(Vec2(u.dot(p), w.dot(p))) ? 1 : 0;
+            const Vec2 q(u.dot(p), w.dot(p));
+            keep[k] = table.contains(q) || (options.hull_margin > 0.0f &&
+                                            distance_to_polygon(hull, q) <= options.hull_margin)
+                          ? 1
+                          : 0;
         }
     });
     std::size_t kept = 0;
@@ -409,6 +427,8 @@ void validate(const SegmentationOptions& o) {
     positive(o.plane_distance, "plane_distance");
     positive(o.cluster_tolerance, "cluster_tolerance");
     positive(o.max_height, "max_height");
+    if (!(o.hull_margin >= 0.0f && std::isfinite(o.hull_margin)))
+        fail("hull_margin must be >= 0, got " + std::to_string(o.hull_margin));
     if (!(o.rim_height >= 0.0f && std::isfinite(o.rim_height)))
         fail("rim_height must be >= 0, got " + std::to_string(o.rim_height));
     if (!(o.rim_noise >= 0.0f && std::isfinite(o.rim_noise)))

@@ -263,6 +263,26 @@ TEST(Segmentation, ExcludesPointsBelowOutsideAndTooHigh) {
     EXPECT_NEAR(flipped.clusters[0].size.z(), 0.2975f, 2e-3f);  // no bottom face
 }
 
+TEST(Segmentation, ObjectsAtTheTablesEdgeKeepWhatStandsOverIt) {
+    // A box standing at the table's edge, 7 cm of it beyond the last table point (as where a big
+    // object hides the table behind it): within hull_margin (10 cm) it is whole; with no margin
+    // the prism cuts it at the hull.
+    Scene scene;
+    add_table(scene);
+    add_box(scene, 0.52f, 0.0f, 0.0f, 0.10f, 0.08f, 0.12f, 0.0f, 0);
+    std::size_t box_points = 0;
+    for (std::size_t i = 0; i < scene.points.size(); ++i)
+        box_points += scene.owner[i] == 0 && scene.points[i].z() > 0.0076f;
+    const esf::SegmentationResult whole = esf::segment_scene(scene.points, scene_options());
+    ASSERT_EQ(whole.clusters.size(), 1u) << whole.message;
+    EXPECT_EQ(whole.clusters[0].points.size(), box_points);
+    esf::SegmentationOptions prism = scene_options();
+    prism.hull_margin = 0.0f;
+    const esf::SegmentationResult cut = esf::segment_scene(scene.points, prism);
+    ASSERT_EQ(cut.clusters.size(), 1u) << cut.message;
+    EXPECT_LT(cut.clusters[0].points.size(), box_points * 9 / 10);
+}
+
 #ifdef ESF_TEST_WITH_PCL  // PCL as the oracle
 TEST(Segmentation, AgreesWithPclPrismAndEuclideanClusters) {
     std::vector<Expected> expected;
@@ -273,6 +293,7 @@ TEST(Segmentation, AgreesWithPclPrismAndEuclideanClusters) {
     options.min_cluster_points = 1;
     options.grouping = esf::Grouping::kEuclidean;
     options.cluster_tolerance = 0.008f;  // finer than the 5 mm grid diagonals: many clusters
+    options.hull_margin = 0.0f;          // PCL's prism: the hull itself
     const esf::SegmentationResult result = esf::segment_scene(scene.points, options);
     ASSERT_TRUE(result.plane_found);
 
@@ -438,6 +459,9 @@ TEST(Segmentation, RejectsEmptyInputAndBadOptions) {
     o = {};
     o.viewpoint.x() = nan;
     EXPECT_NE(message(some, o).find("viewpoint must be finite"), std::string::npos);
+    o = {};
+    o.hull_margin = nan;
+    EXPECT_NE(message(some, o).find("hull_margin must be >= 0"), std::string::npos);
     o = {};
     o.rim_height = -0.001f;
     EXPECT_NE(message(some, o).find("rim_height must be >= 0"), std::string::npos);

@@ -16,7 +16,7 @@
 //      elsewhere in the scene widen it;
 //   4. candidates: full-resolution points between `min_height` and `max_height` above the plane
 //      whose projection lies inside the hull (the polygonal prism of PCL's
-//      ExtractPolygonalPrismData);
+//      ExtractPolygonalPrismData) or within `hull_margin` of it;
 //   5. grouping (`grouping`):
 //      kConvexity (default): small surface patches (esf/surface_patches.hpp: image tiles of an
 //      organised frame, voxels otherwise) join where the surface between them is convex or
@@ -91,6 +91,10 @@ struct SegmentationOptions {
     /// (chosen on generated scenes and real fold 0/2, BENCHMARKS.md).
     float min_height = 0.0075f;
     float max_height = 0.40f;  ///< m above the plane where objects end (higher points ignored)
+    /// m: points whose projection lies within this of the table's hull stand on the table too.
+    /// The hull is the visible table's, which misses what a large object hides behind it (chosen
+    /// on generated scenes and real fold 0, BENCHMARKS.md); 0: the hull itself.
+    float hull_margin = 0.10f;
     /// Organised frames: a cluster then takes in the pixels next to it (repeatedly, without a
     /// depth step of more than 1 cm) that stand below min_height but above max(rim_height,
     /// rim_noise r^2), r the pixel's distance from the viewpoint in metres: an object's lowest
