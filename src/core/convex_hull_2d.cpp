@@ -61,6 +61,8 @@ ConvexRegion::ConvexRegion(std::vector<Vec2> polygon) : polygon_(std::move(polyg
         lo = lo.cwiseMin(p);
         hi = hi.cwiseMax(p);
     }
+    lo_ = lo;
+    hi_ = hi;
     const float width = hi.x() - lo.x(), height = hi.y() - lo.y();
     if (!(width > 0.0f && height > 0.0f && std::isfinite(width) && std::isfinite(height)))
         return;  // no grid: every test takes inside_convex()
@@ -105,6 +107,21 @@ bool ConvexRegion::contains(const Vec2& q) const {
             return true;
     }
     return inside_convex(polygon_, q);
+}
+
+bool ConvexRegion::contains(const Vec2& q, float margin) const {
+    if (contains(q)) return true;
+    if (!(margin > 0.0f)) return false;
+    if ((q - lo_).minCoeff() < -margin || (hi_ - q).minCoeff() < -margin) return false;
+    const float reach = margin * margin;
+    for (std::size_t e = 0; e < polygon_.size(); ++e) {
+        const Vec2& a = polygon_[e];
+        const Vec2 ab = polygon_[(e + 1) % polygon_.size()] - a;
+        const float length = ab.squaredNorm();
+        const float t = length > 0.0f ? std::clamp((q - a).dot(ab) / length, 0.0f, 1.0f) : 0.0f;
+        if ((a + t * ab - q).squaredNorm() <= reach) return true;
+    }
+    return false;
 }
 
 /// Smallest-area rectangle holding a strictly convex counter-clockwise polygon: one side lies

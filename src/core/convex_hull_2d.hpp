@@ -106,11 +106,14 @@ class ConvexRegion {
     /// `polygon`: at least 3 vertices, counter-clockwise.
     explicit ConvexRegion(std::vector<Vec2> polygon);
     bool contains(const Vec2& q) const;
+    /// Whether q lies inside the polygon or within `margin` of it (of its edges).
+    bool contains(const Vec2& q, float margin) const;
     const std::vector<Vec2>& polygon() const { return polygon_; }
 
   private:
     static constexpr int kCells = 64;
     std::vector<Vec2> polygon_;
+    Vec2 lo_ = Vec2::Zero(), hi_ = Vec2::Zero();  // bounding box
     float x0_ = 0.0f, y0_ = 0.0f, scale_x_ = 0.0f, scale_y_ = 0.0f;
     std::vector<std::uint8_t> deep_;  // kCells x kCells, row-major by y
 };

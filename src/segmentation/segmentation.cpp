@@ -54,19 +54,6 @@ std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& n
     return {u, w};
 }
 
-/// Distance from q to the closed polygon `polygon` (its edges).
-float distance_to_polygon(const std::vector<Vec2>& polygon, const Vec2& q) {
-    float nearest = std::numeric_limits<float>::infinity();
-    for (std::size_t e = 0; e < polygon.size(); ++e) {
-        const Vec2& a = polygon[e];
-        const Vec2 ab = polygon[(e + 1) % polygon.size()] - a;
-        const float length = ab.squaredNorm();
-        const float t = length > 0.0f ? std::clamp((q - a).dot(ab) / length, 0.0f, 1.0f) : 0.0f;
-        nearest = std::min(nearest, (a + t * ab - q).norm());
-    }
-    return nearest;
-}
-
 /// Step 6b (organised frames): each cluster takes in the pixels next to it, repeatedly, that
 /// stand below min_height but above the rim floor, without a depth step from the pixel they
 /// grow from; pixels go to the cluster that reaches them first (breadth first from every
@@ -95,10 +82,7 @@ void grow_rims(std::span<const Eigen::Vector3f> points, std::uint32_t width, std
             const float floor = std::max(options.rim_height, options.rim_noise * range * range);
             const float h = plane.height(points[j]);
             if (!(h > floor && h <= options.min_height)) continue;
-            if ((points[j] - options.viewpoint).norm() - (points[i] - options.viewpoint).norm() >
-                    kMaxStep ||
-                (points[i] - options.viewpoint).norm() - range > kMaxStep)
-                continue;
+            if (std::abs(range - (points[i] - options.viewpoint).norm()) > kMaxStep) continue;
             owner[j] = owner[i];
             grown[owner[i]].push_back(j);
             queue.push_back(j);
@@ -272,10 +256,7 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
              k < chunk_begin(c + 1, candidates.size()); ++k) {
             const Eigen::Vector3f& p = points[candidates[k]];
             const Vec2 q(u.dot(p), w.dot(p));
-            keep[k] = table.contains(q) || (options.hull_margin > 0.0f &&
-                                            distance_to_polygon(hull, q) <= options.hull_margin)
-                          ? 1
-                          : 0;
+            keep[k] = table.contains(q, options.hull_margin) ? 1 : 0;
         }
     });
     std::size_t kept = 0;

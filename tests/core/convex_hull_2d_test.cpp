@@ -126,6 +126,22 @@ TEST(ConvexHull2d, RegionAgreesWithInsideConvexEverywhere) {
     }
 }
 
+TEST(ConvexHull2d, RegionWithAMarginIsTheRoundedOffset) {
+    // The unit square, counter-clockwise, with a margin of 0.1: beside an edge the offset is
+    // 0.1 wide; at a corner it is rounded (the diagonal reaches 0.1, not 0.1 sqrt 2).
+    const esf::detail::ConvexRegion square({{0, 0}, {1, 0}, {1, 1}, {0, 1}});
+    using V = esf::detail::Vec2;
+    EXPECT_TRUE(square.contains(V(0.5f, 0.5f), 0.1f));
+    EXPECT_TRUE(square.contains(V(1.09f, 0.5f), 0.1f));
+    EXPECT_FALSE(square.contains(V(1.09f, 0.5f)));
+    EXPECT_FALSE(square.contains(V(1.11f, 0.5f), 0.1f));
+    EXPECT_TRUE(square.contains(V(0.5f, -0.09f), 0.1f));
+    EXPECT_TRUE(square.contains(V(1.06f, 1.06f), 0.1f));   // 0.085 from the corner
+    EXPECT_FALSE(square.contains(V(1.08f, 1.08f), 0.1f));  // 0.113 from the corner
+    EXPECT_FALSE(square.contains(V(-0.09f, 0.5f), 0.0f));
+    EXPECT_FALSE(square.contains(V(5.0f, 5.0f), 0.1f));
+}
+
 TEST(ConvexHull2d, SmallestRectangleOfARotatedRectangle) {
     const float angle = 0.4f, length = 3.0f, width = 1.25f;
     const Vec2 a(std::cos(angle), std::sin(angle)), b(-a.y(), a.x());
