@@ -37,6 +37,7 @@ namespace {
 int g_threads = 2;
 std::unique_ptr<esf::Recognizer> g_recognizer;  // verifies when the database stores surfaces
 std::unique_ptr<esf::Recognizer> g_knn_only;
+std::unique_ptr<esf::Recognizer> g_unmerged;  // verifies, parts stay as segmented
 
 /// 185 models x 80 views of random descriptors: ten blocks, each a smooth random bump, the
 /// whole normalised to sum 1 (roughly the shape of real ESF histograms).
@@ -139,6 +140,11 @@ void BM_Frame(benchmark::State& state, const esf::PointCloud* scene) {
     frame(state, scene, *g_recognizer);
 }
 
+/// The whole frame verified, without merging parts (--no-merge-parts).
+void BM_FrameUnmerged(benchmark::State& state, const esf::PointCloud* scene) {
+    frame(state, scene, *g_unmerged);
+}
+
 /// The whole frame by k-NN only (--no-verify).
 void BM_FrameKnnOnly(benchmark::State& state, const esf::PointCloud* scene) {
     frame(state, scene, *g_knn_only);
@@ -173,6 +179,8 @@ int main(int argc, char** argv) {
     esf::RecognizerOptions options;
     options.threads = g_threads;
     g_recognizer = std::make_unique<esf::Recognizer>(db_path, options);
+    options.merge_parts = false;
+    g_unmerged = std::make_unique<esf::Recognizer>(db_path, options);
     options.verify = false;
     g_knn_only = std::make_unique<esf::Recognizer>(db_path, options);
     const esf::RecognizerInfo& info = g_recognizer->info();
@@ -205,6 +213,7 @@ int main(int argc, char** argv) {
                  {"describe", BM_Describe},
                  {"classify", BM_Classify},
                  {"frame", BM_Frame},
+                 {"frame_unmerged", BM_FrameUnmerged},
                  {"frame_knn_only", BM_FrameKnnOnly}})
             benchmark::RegisterBenchmark((stage + "/" + name).c_str(), fn, scene)
                 ->Unit(benchmark::kMillisecond)
@@ -214,5 +223,6 @@ int main(int argc, char** argv) {
     benchmark::Shutdown();
     g_recognizer.reset();
     g_knn_only.reset();
+    g_unmerged.reset();
     return 0;
 }

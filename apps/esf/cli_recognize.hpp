@@ -21,7 +21,8 @@ struct RecognizerArgs {
     bool every_view = false;
 };
 
-/// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --verify-within-class:
+/// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --no-merge-parts,
+/// --verify-within-class:
 /// hypothesis verification (on by default, with the surfaces the database stores).
 inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
     cmd.add_flag_callback(
@@ -42,6 +43,10 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
                    "0.7: a fifth faster, a few more cans named box)")
         ->check(CLI::Range(-1.0, 2.0))
         ->capture_default_str();
+    cmd.add_flag_callback(
+        "--no-merge-parts", [&options] { options.merge_parts = false; },
+        "Scenes: keep the objects as segmented (default: two touching objects become one "
+        "when one model fitted to both explains them better than their own fits)");
     cmd.add_flag_callback(
         "--verify-within-class", [&options] { options.verification.decide_class = false; },
         "Align only models of the class the neighbours named (default: candidates of "

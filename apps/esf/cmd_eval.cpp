@@ -65,6 +65,7 @@ RecognizerOptions recognizer_options(const EvalArgs& args) {
     options.verify = args.verification.verify;
     options.verification_meshes = args.verification.verification_meshes;
     options.verification = args.verification.verification;
+    options.merge_parts = args.verification.merge_parts;
     return options;
 }
 

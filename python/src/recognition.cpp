@@ -182,8 +182,9 @@ void bind_recognition(py::module_& m) {
         .def(py::init([](const fs::path& database, std::size_t k, const std::string& descriptor,
                          bool use_weights, int samplings, const std::string& vote, bool every_view,
                          int threads, bool verify, const std::optional<fs::path>& verify_meshes,
-                         std::size_t candidates, bool verify_within_class) {
+                         std::size_t candidates, bool verify_within_class, bool merge_parts) {
                  RecognizerOptions options;
+                 options.merge_parts = merge_parts;
                  options.verify = verify;
                  if (verify_meshes) options.verification_meshes = verify_meshes->string();
                  options.verification.candidates = candidates;
@@ -210,6 +211,7 @@ void bind_recognition(py::module_& m) {
              py::arg("verify_meshes") = py::none(),
              py::arg("candidates") = defaults.verification.candidates,
              py::arg("verify_within_class") = !defaults.verification.decide_class,
+             py::arg("merge_parts") = defaults.merge_parts,
              "Opens DATABASE (esf train ... -o DATABASE): the ``k`` nearest models (each by its "
              "nearest view; ``every_view``: the k nearest views) are the neighbours; ``vote`` "
              "'nearest' names the nearest one's class (the others give the confidence), "
@@ -221,7 +223,9 @@ void bind_recognition(py::module_& m) {
              "the meshes in ``verify_meshes``, the folder DATABASE was trained from), and the "
              "best fit names class (only the neighbours' class with ``verify_within_class``), "
              "model and pose: ``Classification.pose`` is the fitted pose and ``.fit`` its "
-             "score; ``verification`` says whether it is on. Raises "
+             "score; ``verification`` says whether it is on. In scenes with a frame, "
+             "``merge_parts`` makes two touching objects one when one model fitted to both "
+             "explains them better than their own fits. Raises "
              "FileNotFoundError / "
              "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")

@@ -126,6 +126,9 @@ def test_render_and_scene(meshes, database):
     assert objects[0].class_name in esf.Recognizer(database).categories
     assert objects[0].pose.shape == (4, 4) and objects[0].centroid.shape == (3,)
     np.testing.assert_allclose(objects[0].centroid, seg.clusters[0].centroid)
+    # A cloud that is no sensor's image has no frame to merge parts against: as segmented.
+    apart = esf.Recognizer(database, merge_parts=False).scene(scene)
+    assert [len(o.points) for o in apart] == [len(o.points) for o in objects]
 
 
 def test_train_progress_interrupt_and_resume(tmp_path, meshes):

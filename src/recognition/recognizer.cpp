@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -176,6 +177,9 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
                                     std::to_string(options.query_samplings));
     resolve_threads(options.threads);
     if (options.verify) validate(options.verification);
+    if (!(options.merge_min_inliers >= 0.0 && options.merge_min_inliers <= 1.0))
+        throw std::invalid_argument("recognizer: merge_min_inliers must be in [0, 1], got " +
+                                    std::to_string(options.merge_min_inliers));
     if (options.verify && !options.verification_meshes.empty()) {
         if (!std::filesystem::is_directory(options.verification_meshes))
             throw IoError(file_message(options.verification_meshes, 0,
@@ -544,9 +548,131 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
                             scene.height == static_cast<std::uint32_t>(camera.height);
         std::optional<PointCloud> image;
         if (!framed && !scene.organised()) image = depth_image_of(scene.points, camera);
-        verify_objects(out, framed ? &scene : image ? &*image : nullptr, priors);
+        const PointCloud* frame = framed ? &scene : image ? &*image : nullptr;
+        verify_objects(out, frame, priors);
+        if (frame && impl_->options.merge_parts && out.plane_found) merge_parts(out, *frame);
     }
     return out;
+}
+
+void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) const {
+    // Parts touch where an image neighbour (up to 2 pixels on) of one is within this of the other.
+    constexpr float kContactDistance = 0.015f;
+    constexpr std::size_t kMinContacts = 5;
+    const CameraIntrinsics& camera = impl_->options.verification.camera;
+    const auto width = static_cast<long>(camera.width), height = static_cast<long>(camera.height);
+    std::vector<RecognizedObject>& objects = scene.objects;
+    // Stable names of the objects, so that a pair found wanting is not fitted again.
+    std::vector<std::size_t> names(objects.size());
+    for (std::size_t i = 0; i < names.size(); ++i) names[i] = i;
+    std::size_t next_name = names.size();
+    std::set<std::pair<std::size_t, std::size_t>> rejected;
+    std::vector<int> owner(static_cast<std::size_t>(width * height));
+    std::vector<const Eigen::Vector3f*> seen(owner.size());
+    for (;;) {
+        std::fill(owner.begin(), owner.end(), -1);
+        for (std::size_t i = 0; i < objects.size(); ++i)
+            for (const Eigen::Vector3f& p : objects[i].cluster.points) {
+                if (!(p.z() > 0.0f)) continue;
+                const long u = std::lround(camera.fx * p.x() / p.z() + camera.cx);
+                const long v = std::lround(camera.fy * p.y() / p.z() + camera.cy);
+                if (u < 0 || v < 0 || u >= width || v >= height) continue;
+                owner[static_cast<std::size_t>(v * width + u)] = static_cast<int>(i);
+                seen[static_cast<std::size_t>(v * width + u)] = &p;
+            }
+        std::map<std::pair<int, int>, std::size_t> contacts;
+        for (long v = 0; v < height; ++v)
+            for (long u = 0; u < width; ++u) {
+                const auto pixel = static_cast<std::size_t>(v * width + u);
+                const int a = owner[pixel];
+                if (a < 0) continue;
+                for (const auto& [du, dv] : {std::pair{1L, 0L}, {0L, 1L}, {2L, 0L}, {0L, 2L}}) {
+                    if (u + du >= width || v + dv >= height) continue;
+                    const auto other = static_cast<std::size_t>((v + dv) * width + u + du);
+                    const int b = owner[other];
+                    if (b < 0 || b == a || (*seen[pixel] - *seen[other]).norm() > kContactDistance)
+                        continue;
+                    ++contacts[{std::min(a, b), std::max(a, b)}];
+                }
+            }
+        struct Pair {
+            std::size_t a = 0, b = 0;
+            bool fits = false;
+            double gain = 0.0;
+            RecognizedObject merged;
+        };
+        std::vector<Pair> pairs;
+        const auto fitted = [&](std::size_t i) {
+            return objects[i].classified() && objects[i].classification.fit.has_value();
+        };
+        for (const auto& [ab, count] : contacts) {
+            const auto a = static_cast<std::size_t>(ab.first);
+            const auto b = static_cast<std::size_t>(ab.second);
+            if (count < kMinContacts || !fitted(a) || !fitted(b) ||
+                rejected.count(std::minmax(names[a], names[b])))
+                continue;
+            Pair pair;
+            pair.a = a;
+            pair.b = b;
+            pairs.push_back(std::move(pair));
+        }
+        if (pairs.empty()) return;
+        parallel_for(pairs.size(), impl_->options.threads, [&](std::size_t k) {
+            Pair& pair = pairs[k];
+            const RecognizedObject& a = objects[pair.a];
+            const RecognizedObject& b = objects[pair.b];
+            RecognizedObject& merged = pair.merged;
+            merged.cluster = merge_clusters(a.cluster, b.cluster, scene.plane);
+            const QueryDescriptor d = describe(merged.cluster.points);
+            if (!d.ok()) return;
+            merged.classification = classify_descriptor(d.signatures);
+            verify(merged.classification, Observation{merged.cluster.points, &frame});
+            const std::optional<FitScore>& fit = merged.classification.fit;
+            if (!fit || !merged.classification.verified ||
+                fit->inliers < impl_->options.merge_min_inliers)
+                return;
+            const double na = static_cast<double>(a.cluster.points.size());
+            const double nb = static_cast<double>(b.cluster.points.size());
+            pair.gain = fit->score() -
+                        (na * a.classification.fit->score() + nb * b.classification.fit->score()) /
+                            (na + nb);
+            pair.fits = pair.gain >= 0.0;
+        });
+        std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+            return x.fits != y.fits ? x.fits : x.gain > y.gain;
+        });
+        std::vector<bool> used(objects.size(), false);
+        std::vector<RecognizedObject> next;
+        std::vector<std::size_t> next_names;
+        for (Pair& pair : pairs) {
+            if (!pair.fits) {
+                rejected.insert(std::minmax(names[pair.a], names[pair.b]));
+                continue;
+            }
+            if (used[pair.a] || used[pair.b]) continue;  // fitted again next round
+            used[pair.a] = used[pair.b] = true;
+            next.push_back(std::move(pair.merged));
+            next_names.push_back(next_name++);
+        }
+        if (next.empty()) return;
+        for (std::size_t i = 0; i < objects.size(); ++i)
+            if (!used[i]) {
+                next.push_back(std::move(objects[i]));
+                next_names.push_back(names[i]);
+            }
+        // Largest first, as segmentation orders them.
+        std::vector<std::size_t> order(next.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+            return next[x].cluster.points.size() > next[y].cluster.points.size();
+        });
+        objects.clear();
+        names.clear();
+        for (const std::size_t i : order) {
+            objects.push_back(std::move(next[i]));
+            names.push_back(next_names[i]);
+        }
+    }
 }
 
 void Recognizer::verify_objects(SceneRecognition& scene, const PointCloud* frame,

@@ -54,6 +54,24 @@ std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& n
     return {u, w};
 }
 
+/// A cluster's centroid, size and length axis from its points (Cluster).
+void measure_cluster(Cluster& cluster, const Plane& plane) {
+    const auto [u, w] = plane_basis(plane.normal);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    float top = -std::numeric_limits<float>::infinity();
+    std::vector<Vec2> projected;
+    projected.reserve(cluster.points.size());
+    for (const Eigen::Vector3f& p : cluster.points) {
+        sum += p.cast<double>();
+        top = std::max(top, plane.height(p));
+        projected.emplace_back(u.dot(p), w.dot(p));
+    }
+    cluster.centroid = (sum / static_cast<double>(cluster.points.size())).cast<float>();
+    const Rectangle box = min_area_rectangle(convex_hull(projected));
+    cluster.size = Eigen::Vector3f(box.length, box.width, top);
+    cluster.length_axis = (box.length_axis.x() * u + box.length_axis.y() * w).normalized();
+}
+
 /// Step 6b (organised frames): each cluster takes in the pixels next to it, repeatedly, that
 /// stand below min_height but above the rim floor, without a depth step from the pixel they
 /// grow from; pixels go to the cluster that reaches them first (breadth first from every
@@ -340,19 +358,8 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
 
     parallel_for(clusters.size(), options.threads, [&](std::size_t c) {
         Cluster& cluster = clusters[c];
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        float top = -std::numeric_limits<float>::infinity();
-        std::vector<Vec2> projected;
-        projected.reserve(cluster.points.size());
-        for (const Eigen::Vector3f& p : cluster.points) {
-            sum += p.cast<double>();
-            top = std::max(top, plane.height(p));
-            projected.emplace_back(u.dot(p), w.dot(p));
-        }
-        cluster.centroid = (sum / static_cast<double>(cluster.points.size())).cast<float>();
-        const Rectangle box = min_area_rectangle(convex_hull(projected));
-        cluster.size = Eigen::Vector3f(box.length, box.width, top);
-        cluster.length_axis = (box.length_axis.x() * u + box.length_axis.y() * w).normalized();
+        measure_cluster(cluster, plane);
+        const float top = cluster.size.z();
 
         std::string why;
         if (organised) {
@@ -390,6 +397,20 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
 }
 
 }  // namespace
+
+Cluster merge_clusters(const Cluster& a, const Cluster& b, const Plane& plane) {
+    if (a.points.empty() || b.points.empty())
+        throw std::invalid_argument("merge_clusters: a cluster without points");
+    Cluster out = a;
+    out.points.insert(out.points.end(), b.points.begin(), b.points.end());
+    out.indices.insert(out.indices.end(), b.indices.begin(), b.indices.end());
+    measure_cluster(out, plane);
+    if (b.status == ClusterStatus::kMaybeTruncated) {
+        out.status = ClusterStatus::kMaybeTruncated;
+        if (out.message.empty()) out.message = b.message;
+    }
+    return out;
+}
 
 void validate(const SegmentationOptions& o) {
     auto fail = [](const std::string& what) {

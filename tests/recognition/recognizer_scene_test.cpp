@@ -79,6 +79,52 @@ TEST_F(RecognizerTest, SyntheticSceneWithTwoObjects) {
     }
 }
 
+TEST_F(RecognizerTest, PartsThatOneModelFitsBetterBecomeOneObject) {
+    // The mug alone, its handle towards the camera's side: convexity grouping cuts the handle
+    // off at its joints; fitted to both parts, the mug explains them, and they become one.
+    const esf::Mesh& mug = meshes_["mug"];
+    const std::vector<esf::SceneObject> objects = {{&mug, Eigen::Isometry3d::Identity()}};
+    esf::SceneOptions scene_options;
+    scene_options.table_plane = true;
+    scene_options.table_half_size = 0.6;
+    scene_options.noise = esf::SensorNoise::kKinect;
+    scene_options.seed = 3;
+    const Eigen::Isometry3d camera = esf::look_at({0.6, 0.3, 0.45}, {0, 0, 0.05});
+    const esf::PointCloud scene = esf::render_scene(objects, camera, scene_options);
+    std::size_t mug_points = 0;
+    for (const Eigen::Vector3f& p : scene.points)
+        mug_points += std::isfinite(p.z()) && (camera.inverse() * p.cast<double>()).z() > 0.01;
+
+    esf::RecognizerOptions apart;
+    apart.merge_parts = false;
+    const esf::SceneRecognition parts = esf::Recognizer(db_path_, apart).recognize_scene(scene, {});
+    ASSERT_GE(parts.objects.size(), 2u) << "the mug is no longer cut at its handle";
+
+    for (const int threads : {1, 2}) {
+        esf::RecognizerOptions options;
+        options.threads = threads;
+        const esf::Recognizer recognizer(db_path_, options);
+        ASSERT_TRUE(recognizer.verifies());
+        const esf::SceneRecognition result = recognizer.recognize_scene(scene, {});
+        ASSERT_EQ(result.objects.size(), 1u) << result.message;
+        const esf::RecognizedObject& o = result.objects.front();
+        ASSERT_TRUE(o.classified()) << o.error;
+        EXPECT_EQ(o.classification.class_name, "mug");
+        EXPECT_TRUE(o.classification.verified);
+        std::size_t parts_points = 0;
+        for (const esf::RecognizedObject& p : parts.objects)
+            parts_points += p.cluster.points.size();
+        EXPECT_EQ(o.cluster.points.size(), parts_points);
+        EXPECT_GT(o.cluster.points.size(), mug_points * 8 / 10);
+        EXPECT_EQ(o.cluster.indices.size(), o.cluster.points.size());
+        // Measured again as one object: its centroid is its points' mean.
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (const Eigen::Vector3f& p : o.cluster.points) mean += p.cast<double>();
+        mean /= static_cast<double>(o.cluster.points.size());
+        EXPECT_LT((mean - o.cluster.centroid.cast<double>()).norm(), 1e-4);
+    }
+}
+
 /// A 1 m x 1 m table at z = 1 (camera frame, facing the camera) sampled every 5 mm.
 esf::Points table_points() {
     esf::Points table;

@@ -833,3 +833,43 @@ TEST(SegmentationRealScenes, NoisyStereoMugScene) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(MergeClusters, OneObjectMeasuredAgain) {
+    // Table z = 0 (normal up); two halves of a 0.2 x 0.1 x 0.05 m block, split along x.
+    esf::Plane plane;
+    plane.normal = Eigen::Vector3f::UnitZ();
+    plane.d = 0.0f;
+    const auto half = [](float x0, std::uint32_t first) {
+        esf::Cluster c;
+        for (int i = 0; i <= 10; ++i)
+            for (int j = 0; j <= 10; ++j)
+                for (const float z : {0.01f, 0.05f}) {
+                    c.points.emplace_back(x0 + 0.01f * float(i), 0.01f * float(j), z);
+                    c.indices.push_back(first + static_cast<std::uint32_t>(c.indices.size()));
+                }
+        return c;
+    };
+    esf::Cluster a = half(0.0f, 0), b = half(0.1f, 1000);
+    b.status = esf::ClusterStatus::kMaybeTruncated;
+    b.message = "may be cut off: touches the image border";
+    const esf::Cluster m = esf::merge_clusters(a, b, plane);
+    ASSERT_EQ(m.points.size(), a.points.size() + b.points.size());
+    ASSERT_EQ(m.indices.size(), m.points.size());
+    EXPECT_EQ(m.indices.front(), 0u);
+    EXPECT_EQ(m.indices[a.indices.size()], 1000u);
+    EXPECT_NEAR(m.size.x(), 0.2f, 1e-4f);  // length: both halves
+    EXPECT_NEAR(m.size.y(), 0.1f, 1e-4f);
+    EXPECT_NEAR(m.size.z(), 0.05f, 1e-6f);
+    EXPECT_NEAR(std::abs(m.length_axis.x()), 1.0f, 1e-4f);
+    EXPECT_NEAR(m.centroid.x(), 0.1f, 1e-4f);
+    EXPECT_NEAR(m.centroid.y(), 0.05f, 1e-4f);
+    EXPECT_NEAR(m.centroid.z(), 0.03f, 1e-4f);
+    EXPECT_EQ(m.status, esf::ClusterStatus::kMaybeTruncated);
+    EXPECT_EQ(m.message, b.message);
+    EXPECT_EQ(esf::merge_clusters(a, a, plane).status, esf::ClusterStatus::kOk);
+    EXPECT_THROW(esf::merge_clusters(a, esf::Cluster{}, plane), std::invalid_argument);
+}
+
+}  // namespace

@@ -71,6 +71,14 @@ struct RecognizerOptions {
     /// Surfaces load once, on first use.
     std::string verification_meshes;
     VerificationOptions verification;
+    /// Scenes with a frame (recognize with a frame, when verifying): two touching objects (image
+    /// neighbours within 1.5 cm) become one when a model fitted to both is verified, explains at
+    /// least merge_min_inliers of their points and scores no less than the point-weighted mean
+    /// of their own fits: an object that segmentation cut at a concave joint (a mug's handle, a
+    /// screwdriver's shaft, a figurine's limbs). Repeated while pairs merge. Chosen on generated
+    /// scenes and real fold 0 (BENCHMARKS.md). false: the objects stay as segmented.
+    bool merge_parts = true;
+    double merge_min_inliers = 0.7;  ///< [0, 1]
 };
 
 /// How query clouds are described: what the database's descriptors were made with.
@@ -242,6 +250,7 @@ class Recognizer {
     SceneRecognition recognize_unverified(SegmentationResult segmentation) const;
     void verify_objects(SceneRecognition& scene, const PointCloud* frame,
                         std::span<const std::optional<PriorFit>> priors) const;
+    void merge_parts(SceneRecognition& scene, const PointCloud& frame) const;  // merge_parts
 
     struct Impl;
     std::unique_ptr<Impl> impl_;

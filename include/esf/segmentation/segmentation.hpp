@@ -181,6 +181,11 @@ struct SegmentationResult {
 /// Throws std::invalid_argument when an option is out of range.
 void validate(const SegmentationOptions& options);
 
+/// Two clusters of one segmentation as one object: the points and indices of both (a's first),
+/// centroid, size and length axis measured again on `plane`; maybe truncated when either is.
+/// Throws std::invalid_argument for a cluster without points.
+Cluster merge_clusters(const Cluster& a, const Cluster& b, const Plane& plane);
+
 /// Marks a pixel of depth_image_of()'s `source` that no point lies on.
 inline constexpr std::uint32_t kNoPoint = 0xffffffffu;
 

@@ -1,0 +1,105 @@
+// Where verified poses go wrong on generated scenes whose models the database holds (a study;
+// BENCHMARKS.md, "Pose"): for each object at least half visible and found as one cluster, the
+// rank of its own model among the k-NN neighbours, the score of the fit verification chose, and
+// the score of its own model fitted from its nearest view and from its true pose.
+//   pose_study DB SCENES.csv   (truth.json beside SCENES.csv; prints one CSV row per object)
+#include <Eigen/Core>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "esf/evaluation/pose_accuracy.hpp"
+#include "esf/evaluation/scene_evaluation.hpp"
+#include "esf/evaluation/segmentation_evaluation.hpp"
+#include "esf/io/cloud_io.hpp"
+#include "esf/recognition/pose_verification.hpp"
+#include "esf/recognition/recognizer.hpp"
+#include "esf/segmentation/segmentation.hpp"
+#include "esf/training/database.hpp"
+
+namespace fs = std::filesystem;
+
+int main(int argc, char** argv) {
+    if (argc != 3) {
+        std::cerr << "usage: pose_study DB SCENES.csv\n";
+        return 1;
+    }
+    const std::string db_path = argv[1];
+    const esf::SceneSet set = esf::read_scene_set(argv[2]);
+    nlohmann::json truth;
+    std::ifstream(fs::path(argv[2]).parent_path() / "truth.json") >> truth;
+    esf::RecognizerOptions options;
+    options.threads = 1;
+    const esf::Recognizer recognizer(db_path, options);
+    esf::Database db(db_path, esf::OpenMode::kRead);
+    std::map<std::string, std::shared_ptr<esf::PreparedModel>> prepared;
+    const esf::VerificationOptions& vo = options.verification;
+    std::printf(
+        "scene,object,class,model,outcome,rank,chosen_class,chosen_model,chosen_score,own_view_score,"
+        "own_truth_score,own_view_adds\n");
+    for (const auto& scene : truth.at("scenes")) {
+        const std::string file =
+            (fs::path(argv[2]).parent_path() / scene.at("file").get<std::string>()).string();
+        const esf::PointCloud cloud = esf::read_cloud(file);
+        esf::SegmentationResult seg = esf::segment_scene(cloud, {});
+        const esf::SceneRecognition rec = recognizer.recognize(std::move(seg), cloud);
+        std::vector<esf::Cluster> clusters;
+        for (const auto& o : rec.objects) clusters.push_back(o.cluster);
+        const esf::SegmentationScore score =
+            esf::score_segmentation(cloud.points, cloud.labels, clusters);
+        for (const auto& t : scene.at("objects")) {
+            if (t.at("visible").get<double>() < 0.5) continue;
+            const auto id = t.at("object_id").get<std::uint32_t>();
+            const std::string cls = t.at("class").get<std::string>();
+            const std::string model = fs::path(t.at("model").get<std::string>()).stem().string();
+            Eigen::Matrix4d pose;
+            for (int k = 0; k < 16; ++k)
+                pose(k / 4, k % 4) = t.at("pose").at(static_cast<std::size_t>(k)).get<double>();
+            const esf::ObjectSegmentation* seg_o = nullptr;
+            for (const auto& o : score.objects)
+                if (o.object_id == id) seg_o = &o;
+            if (!seg_o) continue;
+            const std::string outcome = esf::to_string(seg_o->outcome);
+            std::printf("%s,%u,%s,%s,%s", scene.at("file").get<std::string>().c_str(), id,
+                        cls.c_str(), model.c_str(), outcome.c_str());
+            if (seg_o->cluster < 0 || !rec.objects[seg_o->cluster].classified()) {
+                std::printf(",,,,,,,\n");
+                continue;
+            }
+            const esf::RecognizedObject& r = rec.objects[seg_o->cluster];
+            int rank = -1;
+            const esf::NeighbourView* own = nullptr;
+            // Unverified neighbours.
+            const esf::QueryDescriptor d = recognizer.describe(r.cluster.points);
+            const esf::Classification knn = recognizer.classify_descriptor(d.signatures);
+            for (std::size_t i = 0; i < knn.neighbours.size(); ++i)
+                if (knn.neighbours[i].model_name == model && knn.neighbours[i].class_name == cls) {
+                    rank = static_cast<int>(i);
+                    own = &knn.neighbours[i];
+                    break;
+                }
+            auto& pm = prepared[cls + "/" + model];
+            if (!pm) pm = std::make_shared<esf::PreparedModel>(*db.model_surface(cls, model));
+            const esf::PreparedObservation obs(esf::Observation{r.cluster.points, &cloud},
+                                               vo.camera);
+            const esf::PoseFit at_truth =
+                esf::fit_model(*pm, pose, obs, vo, false, esf::FitStart::kCameraPose);
+            double view_score = -9, view_adds = -1;
+            if (own) {
+                const esf::PoseFit f = esf::fit_model(*pm, own->pose.cast<double>(), obs, vo);
+                view_score = f.fit.score();
+                view_adds = esf::add_s(pm->surface().points, pose, f.model_to_camera) /
+                            esf::posed_diameter(pm->surface().points, pose);
+            }
+            std::printf(",%d,%s,%s,%.3f,%.3f,%.3f,%.3f\n", rank,
+                        r.classification.class_name.c_str(), r.classification.best_model.c_str(),
+                        r.classification.fit ? r.classification.fit->score() : -9.0, view_score,
+                        at_truth.fit.score(), view_adds);
+        }
+    }
+    return 0;
+}
