@@ -3,7 +3,7 @@
 // object, and the tracks' update, frame after frame of a recording (read into memory first).
 //
 //   live_bench --db DB --recording DIR [--threads N] [--fusion models|likelihood] [--no-verify]
-//              [--no-prior-fits]
+//              [--no-prior-fits] [--no-merge-parts]
 //              [benchmark flags]
 //
 // DB: a training database (default $ESF_BENCH_DB or /tmp/esf_all.sqlite); DIR: a recording of
@@ -61,6 +61,7 @@ int main(int argc, char** argv) {
         std::getenv("ESF_BENCH_DB") ? std::getenv("ESF_BENCH_DB") : "/tmp/esf_all.sqlite";
     std::string recording;
     bool verify = true;
+    bool merge_parts = true;
     std::vector<char*> rest = {argv[0]};
     for (int i = 1; i < argc; ++i) {
         const std::string arg = argv[i];
@@ -74,6 +75,8 @@ int main(int argc, char** argv) {
             verify = false;
         else if (arg == "--no-prior-fits")
             g_tracking.prior_fits = false;
+        else if (arg == "--no-merge-parts")
+            merge_parts = false;
         else if (arg == "--fusion" && i + 1 < argc)
             g_tracking.fusion = esf::parse_enum<esf::FusionRule>(argv[++i]);
         else
@@ -91,6 +94,7 @@ int main(int argc, char** argv) {
     esf::RecognizerOptions options;
     options.threads = g_threads;
     options.verify = verify;
+    options.merge_parts = merge_parts;
     g_recognizer = std::make_unique<esf::Recognizer>(db, options);
     esf::KinectRecordingReader reader(recording);
     while (auto frame = reader.next()) g_frames.push_back(std::move(*frame));

@@ -3,7 +3,7 @@
 // track, in every frame and after 1, 10 and 30 frames (esf/evaluation/scene_sequences.hpp).
 //
 //   live_fusion DB DIR [--threads N] [--fusion models|likelihood] [--no-verify]
-//               [--no-prior-fits]
+//               [--no-prior-fits] [--no-merge-parts]
 //
 // Use model groups the database does not hold:
 //   esf train ROOT -o held_out.sqlite --other-folds 0/3
@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
     if (argc < 3) {
         std::fprintf(stderr,
                      "usage: live_fusion DB DIR [--threads N] [--fusion models|likelihood] "
-                     "[--no-verify] [--no-prior-fits]\n");
+                     "[--no-verify] [--no-prior-fits] [--no-merge-parts]\n");
         return 1;
     }
     esf::RecognizerOptions options;
@@ -31,6 +31,10 @@ int main(int argc, char** argv) {
             const std::string arg = argv[i];
             if (arg == "--no-verify" || arg == "--no-prior-fits") {
                 (arg == "--no-verify" ? options.verify : fusion.tracking.prior_fits) = false;
+                continue;
+            }
+            if (arg == "--no-merge-parts") {
+                options.merge_parts = false;
                 continue;
             }
             if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");

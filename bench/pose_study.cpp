@@ -39,7 +39,8 @@ int main(int argc, char** argv) {
     std::map<std::string, std::shared_ptr<esf::PreparedModel>> prepared;
     const esf::VerificationOptions& vo = options.verification;
     std::printf(
-        "scene,object,class,model,outcome,rank,chosen_class,chosen_model,chosen_score,own_view_score,"
+        "scene,object,class,model,outcome,rank,chosen_class,chosen_model,chosen_score,own_view_"
+        "score,"
         "own_truth_score,own_view_adds\n");
     for (const auto& scene : truth.at("scenes")) {
         const std::string file =
