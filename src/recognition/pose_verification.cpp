@@ -311,10 +311,10 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         const Eigen::Vector3d t = m.topRightCorner<3, 1>();
         for (std::size_t i = 0; i < surface.points.size(); i += step) {
             const Eigen::Vector3d p = r * surface.points[i].cast<double>() + t;
-            const Eigen::Vector3d n = (r * surface.normals[i].cast<double>()).normalized();
-            if (n.dot(p) < 0.0) {
+            const Eigen::Vector3d n = r * surface.normals[i].cast<double>();
+            if (n.dot(p) < 0.0) {  // facing the camera (the length does not change the sign)
                 points.push_back(p);
-                normals.push_back(n);
+                normals.push_back(n.normalized());
             }
         }
     };
@@ -350,28 +350,52 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         Eigen::Matrix<double, 7, 7> ata = Eigen::Matrix<double, 7, 7>::Zero();
         Eigen::Matrix<double, 7, 1> atb = Eigen::Matrix<double, 7, 1>::Zero();
         std::size_t pairs = 0;
+        // The point-to-point rows of a pair, [-[arm]x | I | arm], summed in closed form: their
+        // normal equations need only these sums (arm: the point about the pivot, d: its offset).
+        double arm_squared = 0.0, arm_dot_d = 0.0;
+        Eigen::Matrix3d arm_outer = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d arm_sum = Eigen::Vector3d::Zero(), arm_cross_d = Eigen::Vector3d::Zero(),
+                        d_sum = Eigen::Vector3d::Zero();
         const std::size_t step = std::max<std::size_t>(1, points.size() / kIcpSamples);
         for (std::size_t i = 0; i < points.size(); i += step) {
             Eigen::Vector3d target;
             if (!pair(points[i], target, radius)) continue;
             const Eigen::Vector3d arm = points[i] - pivot;
+            const Eigen::Vector3d d = target - points[i];
             Eigen::Matrix<double, 7, 1> row;
             row.head<3>() = arm.cross(normals[i]);
             row.segment<3>(3) = normals[i];
             row(6) = arm.dot(normals[i]);
-            const double b = (target - points[i]).dot(normals[i]);
-            ata += row * row.transpose();
-            atb += row * b;
-            Eigen::Matrix<double, 3, 7> rows;
-            rows.leftCols<3>() << 0.0, arm.z(), -arm.y(), -arm.z(), 0.0, arm.x(), arm.y(), -arm.x(),
-                0.0;
-            rows.middleCols<3>(3).setIdentity();
-            rows.col(6) = arm;
-            ata += kPointWeight * rows.transpose() * rows;
-            atb += kPointWeight * rows.transpose() * (target - points[i]);
+            ata.selfadjointView<Eigen::Lower>().rankUpdate(row);
+            atb += row * d.dot(normals[i]);
+            arm_squared += arm.squaredNorm();
+            arm_outer.selfadjointView<Eigen::Lower>().rankUpdate(arm);
+            arm_sum += arm;
+            arm_cross_d += arm.cross(d);
+            d_sum += d;
+            arm_dot_d += arm.dot(d);
             ++pairs;
         }
         if (pairs < 7) break;
+        ata.triangularView<Eigen::StrictlyUpper>() = ata.transpose();
+        arm_outer.triangularView<Eigen::StrictlyUpper>() = arm_outer.transpose();
+        {
+            Eigen::Matrix3d skew;  // [arm_sum]x
+            skew << 0.0, -arm_sum.z(), arm_sum.y(), arm_sum.z(), 0.0, -arm_sum.x(), -arm_sum.y(),
+                arm_sum.x(), 0.0;
+            Eigen::Matrix<double, 7, 7> point = Eigen::Matrix<double, 7, 7>::Zero();
+            point.topLeftCorner<3, 3>() = arm_squared * Eigen::Matrix3d::Identity() - arm_outer;
+            point.block<3, 3>(0, 3) = skew;
+            point.block<3, 3>(3, 0) = skew.transpose();
+            point.block<3, 3>(3, 3) = static_cast<double>(pairs) * Eigen::Matrix3d::Identity();
+            point.block<3, 1>(3, 6) = arm_sum;
+            point.block<1, 3>(6, 3) = arm_sum.transpose();
+            point(6, 6) = arm_squared;
+            ata += kPointWeight * point;
+            atb.head<3>() += kPointWeight * arm_cross_d;
+            atb.segment<3>(3) += kPointWeight * d_sum;
+            atb(6) += kPointWeight * arm_dot_d;
+        }
         Eigen::Matrix<double, 7, 1> x = Eigen::Matrix<double, 7, 1>::Zero();
         if (free_scale) {
             x = ata.ldlt().solve(atb);
