@@ -209,4 +209,91 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
     sets.number_sets(component);
 }
 
+std::size_t join_container_floors(std::span<const Eigen::Vector3f> points, std::uint32_t width,
+                                  const Plane& plane, float min_height,
+                                  std::vector<Cluster>& clusters,
+                                  const ContainerPartsOptions& options) {
+    if (clusters.empty() || width == 0) return 0;
+    const Eigen::Vector3f& up = plane.normal;
+    const Eigen::Vector3f helper =
+        std::abs(up.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
+    const Eigen::Vector3f u = up.cross(helper).normalized(), w = up.cross(u);
+    const auto planar = [&](const Eigen::Vector3f& p) {
+        return Eigen::Vector2d(u.dot(p), w.dot(p));
+    };
+    std::vector<bool> held(points.size(), false);
+    for (const Cluster& c : clusters)
+        for (const std::uint32_t i : c.indices) held[i] = true;
+    std::size_t taken = 0;
+    for (Cluster& cluster : clusters) {
+        if (cluster.indices.size() < options.min_points) continue;
+        float top = -std::numeric_limits<float>::infinity();
+        for (const Eigen::Vector3f& p : cluster.points) top = std::max(top, plane.height(p));
+        if (!(top > min_height)) continue;
+        // The upper part's circle, about its first point (small sums).
+        std::vector<Eigen::Vector2d> rim;
+        Eigen::Vector2d origin = Eigen::Vector2d::Zero();
+        CircleSums sums;
+        for (const Eigen::Vector3f& p : cluster.points)
+            if (plane.height(p) >= options.rim_band * top) {
+                if (rim.empty()) origin = planar(p);
+                rim.push_back(planar(p) - origin);
+                sums.add(rim.back());
+            }
+        if (rim.size() < options.min_points / 4) continue;
+        Circle c = fit_circle(sums);
+        if (!(c.radius >= options.min_radius && c.radius <= options.max_radius)) continue;
+        c.rms = std::sqrt(radial_sum(c, rim) / static_cast<double>(rim.size()));
+        if (c.rms > options.max_residual * c.radius) continue;
+        const double reach = c.radius - options.margin;
+        if (!(reach > 0.0)) continue;
+        // The cluster's pixel bounding box.
+        std::uint32_t row0 = std::numeric_limits<std::uint32_t>::max(), row1 = 0;
+        std::uint32_t col0 = row0, col1 = 0;
+        for (const std::uint32_t i : cluster.indices) {
+            row0 = std::min(row0, i / width);
+            row1 = std::max(row1, i / width);
+            col0 = std::min(col0, i % width);
+            col1 = std::max(col1, i % width);
+        }
+        // The floor is seen through the opening, walled in on all four sides in the image; the
+        // table under an overhanging rim is not (nothing of the object below it).
+        constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+        std::vector<std::uint32_t> row_first(row1 - row0 + 1, kNone), row_last(row1 - row0 + 1, 0);
+        std::vector<std::uint32_t> col_first(col1 - col0 + 1, kNone), col_last(col1 - col0 + 1, 0);
+        for (const std::uint32_t i : cluster.indices) {
+            const std::uint32_t row = i / width, col = i % width;
+            row_first[row - row0] = std::min(row_first[row - row0], col);
+            row_last[row - row0] = std::max(row_last[row - row0], col);
+            col_first[col - col0] = std::min(col_first[col - col0], row);
+            col_last[col - col0] = std::max(col_last[col - col0], row);
+        }
+        std::vector<std::uint32_t> floor;
+        for (std::uint32_t row = row0; row <= row1; ++row)
+            for (std::uint32_t col = col0; col <= col1; ++col) {
+                const std::uint32_t i = row * width + col;
+                const Eigen::Vector3f& p = points[i];
+                if (held[i] || !p.allFinite() || !(std::abs(plane.height(p)) < min_height))
+                    continue;
+                if (row_first[row - row0] == kNone || !(row_first[row - row0] < col) ||
+                    !(col < row_last[row - row0]) || col_first[col - col0] == kNone ||
+                    !(col_first[col - col0] < row) || !(row < col_last[col - col0]))
+                    continue;
+                if ((planar(p) - origin - c.centre).squaredNorm() < reach * reach)
+                    floor.push_back(i);
+            }
+        if (floor.empty()) continue;
+        for (const std::uint32_t i : floor) held[i] = true;
+        taken += floor.size();
+        std::vector<std::uint32_t> indices(cluster.indices.size() + floor.size());
+        std::merge(cluster.indices.begin(), cluster.indices.end(), floor.begin(), floor.end(),
+                   indices.begin());
+        cluster.indices = std::move(indices);
+        cluster.points.clear();
+        cluster.points.reserve(cluster.indices.size());
+        for (const std::uint32_t i : cluster.indices) cluster.points.push_back(points[i]);
+    }
+    return taken;
+}
+
 }  // namespace esf::detail

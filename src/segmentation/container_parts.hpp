@@ -18,6 +18,8 @@
 #include <span>
 #include <vector>
 
+#include "esf/segmentation/segmentation.hpp"
+
 namespace esf::detail {
 
 struct ContainerPartsOptions {
@@ -43,5 +45,19 @@ struct ContainerPartsOptions {
 void join_container_parts(std::span<const Eigen::Vector3f> points,
                           std::vector<std::uint32_t>& component, const Eigen::Vector3f& up,
                           float offset, const ContainerPartsOptions& options = {});
+
+/// The floor of an open container (organised frames): a bowl's, cup's or plate's inner bottom
+/// lies a few millimetres above the table, below min_height, and was taken for table. A cluster
+/// whose upper part (its points above rim_band x its top height; at least min_points / 4 of them,
+/// of a cluster of min_points or more) fits a round circle as above takes in every pixel of its
+/// image bounding box that no cluster holds, lies less than min_height from the plane, on the
+/// plane within the circle's radius less `margin` of its centre, and in the image between pixels
+/// of the cluster to its left and right, above and below (seen through the opening: the table
+/// under an overhanging rim has none of the object below it). `points`: the frame (width x height,
+/// row-major); cluster indices are pixel indices and stay ascending. Returns the points taken in.
+std::size_t join_container_floors(std::span<const Eigen::Vector3f> points, std::uint32_t width,
+                                  const Plane& plane, float min_height,
+                                  std::vector<Cluster>& clusters,
+                                  const ContainerPartsOptions& options = {});
 
 }  // namespace esf::detail

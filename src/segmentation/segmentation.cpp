@@ -355,6 +355,8 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
 
     if (organised && options.rim_height < options.min_height)
         grow_rims(points, width, height, plane, options, clusters);
+    if (organised && options.join_container_floors)
+        detail::join_container_floors(points, width, plane, options.min_height, clusters);
 
     parallel_for(clusters.size(), options.threads, [&](std::size_t c) {
         Cluster& cluster = clusters[c];

@@ -117,6 +117,11 @@ struct SegmentationOptions {
     /// kConvexity: a group whose footprint on the plane lies within another group's round
     /// footprint is its inside (a cup's, a bowl's or a pot's inner wall and bottom).
     bool join_container_parts = true;
+    /// Organised frames: a cluster whose upper part is round (an open container seen from
+    /// above) takes in the points below min_height inside that circle (less 1 cm) that no
+    /// cluster holds: its floor, a few millimetres above the table (a bowl's, a cup's, a plate's
+    /// inner bottom).
+    bool join_container_floors = true;
     /// kEuclidean: clustering.
     float cluster_tolerance = 0.02f;           ///< m; largest gap inside one object
     std::size_t min_cluster_points = 100;      ///< full-resolution points, >= 1
