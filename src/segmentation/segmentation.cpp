@@ -27,6 +27,11 @@ namespace {
 constexpr std::size_t kChunks = 64;
 // Pixels from the image border within which a cluster may be cut off.
 constexpr std::uint32_t kBorderMargin = 2;
+// A table stands at least this high above the floor (m); what stands on a table and is flat and
+// large enough to pass for one is lower.
+constexpr float kFurnitureHeight = 0.3f;
+// Planes within 10 degrees of each other are parallel.
+constexpr float kParallelCosine = 0.985f;
 
 std::string format_metres(double value) { return detail::significant_text(value, 3) + " m"; }
 
@@ -182,6 +187,28 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     if (plane.height(options.viewpoint) < 0.0f) {
         plane.normal = -plane.normal;
         plane.d = -plane.d;
+    }
+    // 2b. Past a table's edge the floor can hold more points than the table: a parallel plane
+    // well above the dominant one (furniture height) that holds a share of the points a table
+    // would is the table the objects stand on.
+    {
+        std::vector<Eigen::Vector3f> above;
+        for (const Eigen::Vector3f& p : samples)
+            if (plane.height(p) > kFurnitureHeight) above.push_back(p);
+        const double needed = options.min_plane_fraction * static_cast<double>(samples.size());
+        if (static_cast<double>(above.size()) >= needed && above.size() >= 3) {
+            const Hypothesis higher = ransac_plane(above, options);
+            Plane table{higher.normal, higher.d};
+            if (higher.inliers > 0 && static_cast<double>(higher.inliers) >= needed &&
+                std::abs(table.normal.dot(plane.normal)) >= kParallelCosine) {
+                table = refit_plane(above, table, options.plane_distance);
+                if (table.height(options.viewpoint) < 0.0f) {
+                    table.normal = -table.normal;
+                    table.d = -table.d;
+                }
+                plane = table;
+            }
+        }
     }
     result.plane = plane;
 

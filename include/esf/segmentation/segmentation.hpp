@@ -10,7 +10,10 @@
 //      about `plane_samples` remain): RANSAC with per-hypothesis generators derived from
 //      (seed, hypothesis index), then a least-squares refit to the sampled inliers;
 //   2. the plane is oriented so that its normal points to the sensor (`viewpoint`), which decides
-//      "above" in any frame (camera frame z forward, or y up / z towards the viewer);
+//      "above" in any frame (camera frame z forward, or y up / z towards the viewer); a plane
+//      parallel to it (within 10 degrees), 30 cm or more above it and holding as large a share
+//      of the points as a table must (`min_plane_fraction`), is the table instead: the dominant
+//      plane was the floor, seen past the table's edge;
 //   3. the 2-D convex hull of all full-resolution points within `plane_distance` of the plane
 //      (Akl-Toussaint filter, then Andrew's monotone chain) bounds the table; coplanar points
 //      elsewhere in the scene widen it;
@@ -33,8 +36,9 @@
 //      indices and points still refer to the input, in its order;
 //   6. clusters with fewer than `min_cluster_points` or more than `max_cluster_points`
 //      full-resolution points are dropped; in organised frames the others grow down to their
-//      rims below `min_height` (`rim_height`); they are sorted by point count (descending),
-//      then by centroid x, y, z.
+//      rims below `min_height` (`rim_height`), and an open container takes in its floor
+//      (`join_container_floors`); they are sorted by point count (descending), then by centroid
+//      x, y, z.
 //
 // Results are identical for every thread count. segment_scene() is re-entrant.
 
