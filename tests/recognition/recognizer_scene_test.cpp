@@ -38,6 +38,17 @@ using esf::test::temp_dir;
 
 // ---- scenes ---------------------------------------------------------------------------------
 
+/// `objects` on a 1.2 m table (world z up) as a Kinect at `camera` sees them.
+esf::PointCloud table_scene(const std::vector<esf::SceneObject>& objects,
+                            const Eigen::Isometry3d& camera) {
+    esf::SceneOptions options;
+    options.table_plane = true;
+    options.table_half_size = 0.6;
+    options.noise = esf::SensorNoise::kKinect;
+    options.seed = 3;
+    return esf::render_scene(objects, camera, options);
+}
+
 TEST_F(RecognizerTest, SyntheticSceneWithTwoObjects) {
     // The mug and the bowl on a table (world z up), seen from 0.9 m at 35 degrees elevation.
     const esf::Mesh& mug = meshes_["mug"];
@@ -46,14 +57,8 @@ TEST_F(RecognizerTest, SyntheticSceneWithTwoObjects) {
     mug_pose.translation() = Eigen::Vector3d(0.0, 0.15, 0.0);
     Eigen::Isometry3d bowl_pose = Eigen::Isometry3d::Identity();
     bowl_pose.translation() = Eigen::Vector3d(0.05, -0.15, 0.0);
-    const std::vector<esf::SceneObject> objects = {{&mug, mug_pose}, {&bowl, bowl_pose}};
-    esf::SceneOptions scene_options;
-    scene_options.table_plane = true;
-    scene_options.table_half_size = 0.6;
-    scene_options.noise = esf::SensorNoise::kKinect;
-    scene_options.seed = 3;
     const Eigen::Isometry3d camera = esf::look_at({0.75, 0.1, 0.5}, {0, 0, 0.05});
-    const esf::PointCloud scene = esf::render_scene(objects, camera, scene_options);
+    const esf::PointCloud scene = table_scene({{&mug, mug_pose}, {&bowl, bowl_pose}}, camera);
 
     for (const int threads : {1, 2}) {
         esf::RecognizerOptions options;
@@ -83,14 +88,8 @@ TEST_F(RecognizerTest, PartsThatOneModelFitsBetterBecomeOneObject) {
     // The mug alone, its handle towards the camera's side: convexity grouping cuts the handle
     // off at its joints; fitted to both parts, the mug explains them, and they become one.
     const esf::Mesh& mug = meshes_["mug"];
-    const std::vector<esf::SceneObject> objects = {{&mug, Eigen::Isometry3d::Identity()}};
-    esf::SceneOptions scene_options;
-    scene_options.table_plane = true;
-    scene_options.table_half_size = 0.6;
-    scene_options.noise = esf::SensorNoise::kKinect;
-    scene_options.seed = 3;
     const Eigen::Isometry3d camera = esf::look_at({0.6, 0.3, 0.45}, {0, 0, 0.05});
-    const esf::PointCloud scene = esf::render_scene(objects, camera, scene_options);
+    const esf::PointCloud scene = table_scene({{&mug, Eigen::Isometry3d::Identity()}}, camera);
     std::size_t mug_points = 0;
     for (const Eigen::Vector3f& p : scene.points)
         mug_points += std::isfinite(p.z()) && (camera.inverse() * p.cast<double>()).z() > 0.01;
