@@ -45,7 +45,7 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
         ->capture_default_str();
     cmd.add_flag_callback(
         "--no-merge-parts", [&options] { options.merge_parts = false; },
-        "Scenes: keep the objects as segmented (default: two touching objects become one "
+        "Scenes: keep the objects as segmented (default: two neighbouring objects become one "
         "when one model fitted to both explains them better than their own fits)");
     cmd.add_flag_callback(
         "--verify-within-class", [&options] { options.verification.decide_class = false; },

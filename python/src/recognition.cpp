@@ -224,7 +224,7 @@ void bind_recognition(py::module_& m) {
              "best fit names class (only the neighbours' class with ``verify_within_class``), "
              "model and pose: ``Classification.pose`` is the fitted pose and ``.fit`` its "
              "score; ``verification`` says whether it is on. In scenes with a frame, "
-             "``merge_parts`` makes two touching objects one when one model fitted to both "
+             "``merge_parts`` makes two neighbouring objects one when one model fitted to both "
              "explains them better than their own fits. Raises "
              "FileNotFoundError / "
              "OSError for a missing or broken file, "

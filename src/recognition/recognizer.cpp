@@ -556,8 +556,9 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
 }
 
 void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) const {
-    // Parts touch where an image neighbour (up to 2 pixels on) of one is within this of the other.
-    constexpr float kContactDistance = 0.015f;
+    // Parts meet where a pixel of one, up to 6 pixels on along its row or column from a pixel of
+    // the other, is within this of it (a thin stem or handle between them may be lost).
+    constexpr float kContactDistance = 0.03f;
     constexpr std::size_t kMinContacts = 5;
     const CameraIntrinsics& camera = impl_->options.verification.camera;
     const auto width = static_cast<long>(camera.width), height = static_cast<long>(camera.height);
@@ -586,7 +587,14 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
                 const auto pixel = static_cast<std::size_t>(v * width + u);
                 const int a = owner[pixel];
                 if (a < 0) continue;
-                for (const auto& [du, dv] : {std::pair{1L, 0L}, {0L, 1L}, {2L, 0L}, {0L, 2L}}) {
+                for (const auto& [du, dv] : {std::pair{1L, 0L},
+                                             {0L, 1L},
+                                             {2L, 0L},
+                                             {0L, 2L},
+                                             {4L, 0L},
+                                             {0L, 4L},
+                                             {6L, 0L},
+                                             {0L, 6L}}) {
                     if (u + du >= width || v + dv >= height) continue;
                     const auto other = static_cast<std::size_t>((v + dv) * width + u + du);
                     const int b = owner[other];

@@ -71,12 +71,14 @@ struct RecognizerOptions {
     /// Surfaces load once, on first use.
     std::string verification_meshes;
     VerificationOptions verification;
-    /// Scenes with a frame (recognize with a frame, when verifying): two touching objects (image
-    /// neighbours within 1.5 cm) become one when a model fitted to both is verified, explains at
-    /// least merge_min_inliers of their points and scores no less than the point-weighted mean
-    /// of their own fits: an object that segmentation cut at a concave joint (a mug's handle, a
-    /// screwdriver's shaft, a figurine's limbs). Repeated while pairs merge. Chosen on generated
-    /// scenes and real fold 0 (BENCHMARKS.md). false: the objects stay as segmented.
+    /// Scenes with a frame (recognize with a frame, when verifying): two neighbouring objects
+    /// (pixels at most 6 apart in a row or column, within 3 cm of each other, at 5 places or
+    /// more) become one when a model fitted to both is verified, explains at least
+    /// merge_min_inliers of their points and scores no less than the point-weighted mean of their
+    /// own fits: an object that segmentation cut at a concave joint or a thin stem (a mug's
+    /// handle, a screwdriver's shaft, a figurine's limbs, a wine glass's foot). Repeated while
+    /// pairs merge. Chosen on generated scenes and real fold 0 (BENCHMARKS.md). false: the
+    /// objects stay as segmented.
     bool merge_parts = true;
     double merge_min_inliers = 0.7;  ///< [0, 1]
 };
