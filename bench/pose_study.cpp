@@ -10,6 +10,8 @@
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "esf/evaluation/pose_accuracy.hpp"
@@ -23,15 +25,16 @@
 
 namespace fs = std::filesystem;
 
-int main(int argc, char** argv) {
-    if (argc != 3) {
-        std::cerr << "usage: pose_study DB SCENES.csv\n";
-        return 1;
-    }
-    const std::string db_path = argv[1];
-    const esf::SceneSet set = esf::read_scene_set(argv[2]);
-    nlohmann::json truth;
-    std::ifstream(fs::path(argv[2]).parent_path() / "truth.json") >> truth;
+namespace {
+
+void study(const std::string& db_path, const std::string& scenes_csv) {
+    esf::read_scene_set(scenes_csv);  // refuses what is not a scene set
+    const fs::path truth_path = fs::path(scenes_csv).parent_path() / "truth.json";
+    std::ifstream truth_file(truth_path);
+    if (!truth_file)
+        throw std::runtime_error(truth_path.string() +
+                                 ": no truth (esf generate-scenes writes it)");
+    const nlohmann::json truth = nlohmann::json::parse(truth_file);
     esf::RecognizerOptions options;
     options.threads = 1;
     const esf::Recognizer recognizer(db_path, options);
@@ -39,12 +42,11 @@ int main(int argc, char** argv) {
     std::map<std::string, std::shared_ptr<esf::PreparedModel>> prepared;
     const esf::VerificationOptions& vo = options.verification;
     std::printf(
-        "scene,object,class,model,outcome,rank,chosen_class,chosen_model,chosen_score,own_view_"
-        "score,"
-        "own_truth_score,own_view_adds\n");
+        "scene,object,class,model,outcome,rank,chosen_class,chosen_model,chosen_score,"
+        "own_view_score,own_truth_score,own_view_adds\n");
     for (const auto& scene : truth.at("scenes")) {
         const std::string file =
-            (fs::path(argv[2]).parent_path() / scene.at("file").get<std::string>()).string();
+            (fs::path(scenes_csv).parent_path() / scene.at("file").get<std::string>()).string();
         const esf::PointCloud cloud = esf::read_cloud(file);
         esf::SegmentationResult seg = esf::segment_scene(cloud, {});
         const esf::SceneRecognition rec = recognizer.recognize(std::move(seg), cloud);
@@ -84,7 +86,13 @@ int main(int argc, char** argv) {
                     break;
                 }
             auto& pm = prepared[cls + "/" + model];
-            if (!pm) pm = std::make_shared<esf::PreparedModel>(*db.model_surface(cls, model));
+            if (!pm) {
+                std::optional<esf::ModelSurface> surface = db.model_surface(cls, model);
+                if (!surface)
+                    throw std::runtime_error(db_path + ": no stored surface of " + cls + "/" +
+                                             model);
+                pm = std::make_shared<esf::PreparedModel>(std::move(*surface));
+            }
             const esf::PreparedObservation obs(esf::Observation{r.cluster.points, &cloud},
                                                vo.camera);
             const esf::PoseFit at_truth =
@@ -101,6 +109,21 @@ int main(int argc, char** argv) {
                         r.classification.fit ? r.classification.fit->score() : -9.0, view_score,
                         at_truth.fit.score(), view_adds);
         }
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 3) {
+        std::cerr << "usage: pose_study DB SCENES.csv\n";
+        return 1;
+    }
+    try {
+        study(argv[1], argv[2]);
+    } catch (const std::exception& e) {
+        std::cerr << "pose_study: error: " << e.what() << "\n";
+        return 2;
     }
     return 0;
 }

@@ -1,7 +1,8 @@
 // Latency of online recognition per stage on real organised table scenes (640 x 480, Kinect v1):
 // segmentation, description of the clusters (in parallel), classification of the clusters (one
 // batch, k-NN), and the whole frame: verified (the default, when the database stores the models'
-// surfaces) and by k-NN only. The paper's target is a frame at 30 Hz (33 ms) on two cores.
+// surfaces), verified without merging parts (frame_unmerged) and by k-NN only. The paper's
+// target is a frame at 30 Hz (33 ms) on two cores.
 //
 //   scene_latency_bench [--db PATH] [--threads N] [benchmark flags]
 //

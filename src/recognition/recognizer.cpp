@@ -568,33 +568,31 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
     for (std::size_t i = 0; i < names.size(); ++i) names[i] = i;
     std::size_t next_name = names.size();
     std::set<std::pair<std::size_t, std::size_t>> rejected;
-    std::vector<int> owner(static_cast<std::size_t>(width * height));
+    // Each object's pixels in the image (the last point on a pixel owns it); only the pixels
+    // objects hold are visited and reset.
+    std::vector<int> owner(static_cast<std::size_t>(width * height), -1);
     std::vector<const Eigen::Vector3f*> seen(owner.size());
+    std::vector<std::size_t> held;
     for (;;) {
-        std::fill(owner.begin(), owner.end(), -1);
+        for (const std::size_t pixel : held) owner[pixel] = -1;
+        held.clear();
         for (std::size_t i = 0; i < objects.size(); ++i)
             for (const Eigen::Vector3f& p : objects[i].cluster.points) {
                 if (!(p.z() > 0.0f)) continue;
                 const long u = std::lround(camera.fx * p.x() / p.z() + camera.cx);
                 const long v = std::lround(camera.fy * p.y() / p.z() + camera.cy);
                 if (u < 0 || v < 0 || u >= width || v >= height) continue;
-                owner[static_cast<std::size_t>(v * width + u)] = static_cast<int>(i);
-                seen[static_cast<std::size_t>(v * width + u)] = &p;
+                const auto pixel = static_cast<std::size_t>(v * width + u);
+                if (owner[pixel] < 0) held.push_back(pixel);
+                owner[pixel] = static_cast<int>(i);
+                seen[pixel] = &p;
             }
         std::map<std::pair<int, int>, std::size_t> contacts;
-        for (long v = 0; v < height; ++v)
-            for (long u = 0; u < width; ++u) {
-                const auto pixel = static_cast<std::size_t>(v * width + u);
-                const int a = owner[pixel];
-                if (a < 0) continue;
-                for (const auto& [du, dv] : {std::pair{1L, 0L},
-                                             {0L, 1L},
-                                             {2L, 0L},
-                                             {0L, 2L},
-                                             {4L, 0L},
-                                             {0L, 4L},
-                                             {6L, 0L},
-                                             {0L, 6L}}) {
+        for (const std::size_t pixel : held) {
+            const int a = owner[pixel];
+            const auto u = static_cast<long>(pixel) % width, v = static_cast<long>(pixel) / width;
+            for (const long step : {1L, 2L, 4L, 6L})
+                for (const auto& [du, dv] : {std::pair{step, 0L}, std::pair{0L, step}}) {
                     if (u + du >= width || v + dv >= height) continue;
                     const auto other = static_cast<std::size_t>((v + dv) * width + u + du);
                     const int b = owner[other];
@@ -602,7 +600,7 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
                         continue;
                     ++contacts[{std::min(a, b), std::max(a, b)}];
                 }
-            }
+        }
         struct Pair {
             std::size_t a = 0, b = 0;
             bool fits = false;

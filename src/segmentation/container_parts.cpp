@@ -8,6 +8,7 @@
 #include <span>
 
 #include "core/disjoint_sets.hpp"
+#include "segmentation/plane_fit.hpp"
 
 namespace esf::detail {
 
@@ -98,9 +99,7 @@ void join_container_parts(std::span<const Eigen::Vector3f> points,
                           float offset, const ContainerPartsOptions& options) {
     if (component.empty()) return;
     const std::uint32_t count = *std::max_element(component.begin(), component.end()) + 1;
-    const Eigen::Vector3f helper =
-        std::abs(up.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
-    const Eigen::Vector3f u = up.cross(helper).normalized(), w = up.cross(u);
+    const auto [u, w] = plane_basis(up);
     // Table-plane coordinates about the first point, so that the circle sums stay small.
     const Eigen::Vector2d origin(u.dot(points[0]), w.dot(points[0]));
     const auto planar = [&](const Eigen::Vector3f& p) -> Eigen::Vector2d {
@@ -215,9 +214,7 @@ std::size_t join_container_floors(std::span<const Eigen::Vector3f> points, std::
                                   const ContainerPartsOptions& options) {
     if (clusters.empty() || width == 0) return 0;
     const Eigen::Vector3f& up = plane.normal;
-    const Eigen::Vector3f helper =
-        std::abs(up.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
-    const Eigen::Vector3f u = up.cross(helper).normalized(), w = up.cross(u);
+    const auto [u, w] = plane_basis(up);
     const auto planar = [&](const Eigen::Vector3f& p) {
         return Eigen::Vector2d(u.dot(p), w.dot(p));
     };

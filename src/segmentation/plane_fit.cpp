@@ -112,4 +112,20 @@ Plane refit_plane(std::span<const Eigen::Vector3f> points, const Plane& plane, f
     return refined;
 }
 
+Plane facing(Plane plane, const Eigen::Vector3f& viewpoint) {
+    if (plane.height(viewpoint) < 0.0f) {
+        plane.normal = -plane.normal;
+        plane.d = -plane.d;
+    }
+    return plane;
+}
+
+std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& normal) {
+    const Eigen::Vector3f helper =
+        std::abs(normal.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
+    const Eigen::Vector3f u = normal.cross(helper).normalized();
+    const Eigen::Vector3f w = normal.cross(u);
+    return {u, w};
+}
+
 }  // namespace esf::detail

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <span>
+#include <utility>
 
 #include "esf/segmentation/segmentation.hpp"
 
@@ -27,5 +28,12 @@ PlaneHypothesis ransac_plane(std::span<const Eigen::Vector3f> samples,
 /// of the smallest eigenvalue of their covariance, on the side of plane.normal). Returns the
 /// input plane when fewer than 3 points are that close.
 Plane refit_plane(std::span<const Eigen::Vector3f> points, const Plane& plane, float distance);
+
+/// `plane` with its normal turned, if need be, to the side of `viewpoint` (which decides "above").
+Plane facing(Plane plane, const Eigen::Vector3f& viewpoint);
+
+/// Orthonormal basis (u, w) of the plane with normal `normal` (unit), u x w = normal: the table
+/// plane's coordinates.
+std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& normal);
 
 }  // namespace esf::detail

@@ -45,19 +45,12 @@ using detail::Octagon;
 using detail::Rectangle;
 using detail::Vec2;
 using Hypothesis = detail::PlaneHypothesis;
+using detail::facing;
+using detail::plane_basis;
 using detail::ransac_plane;
 using detail::refit_plane;
 
 // ---------------------------------------------------------------------------------------------
-
-/// Orthonormal basis (u, w) of the plane with u x w = normal.
-std::pair<Eigen::Vector3f, Eigen::Vector3f> plane_basis(const Eigen::Vector3f& normal) {
-    const Eigen::Vector3f helper =
-        std::abs(normal.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
-    const Eigen::Vector3f u = normal.cross(helper).normalized();
-    const Eigen::Vector3f w = normal.cross(u);
-    return {u, w};
-}
 
 /// A cluster's centroid, size and length axis from its points (Cluster).
 void measure_cluster(Cluster& cluster, const Plane& plane) {
@@ -182,12 +175,8 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
     }
 
     // 2. Least-squares refit to the sampled inliers; orient to the viewpoint.
-    Plane plane{best.normal, best.d};
-    plane = refit_plane(samples, plane, options.plane_distance);
-    if (plane.height(options.viewpoint) < 0.0f) {
-        plane.normal = -plane.normal;
-        plane.d = -plane.d;
-    }
+    Plane plane = facing(refit_plane(samples, Plane{best.normal, best.d}, options.plane_distance),
+                         options.viewpoint);
     // 2b. Past a table's edge the floor can hold more points than the table: a parallel plane
     // well above the dominant one (furniture height) that holds a share of the points a table
     // would is the table the objects stand on.
@@ -198,16 +187,11 @@ SegmentationResult segment(std::span<const Eigen::Vector3f> points, std::uint32_
         const double needed = options.min_plane_fraction * static_cast<double>(samples.size());
         if (static_cast<double>(above.size()) >= needed && above.size() >= 3) {
             const Hypothesis higher = ransac_plane(above, options);
-            Plane table{higher.normal, higher.d};
             if (higher.inliers > 0 && static_cast<double>(higher.inliers) >= needed &&
-                std::abs(table.normal.dot(plane.normal)) >= kParallelCosine) {
-                table = refit_plane(above, table, options.plane_distance);
-                if (table.height(options.viewpoint) < 0.0f) {
-                    table.normal = -table.normal;
-                    table.d = -table.d;
-                }
-                plane = table;
-            }
+                std::abs(higher.normal.dot(plane.normal)) >= kParallelCosine)
+                plane = facing(
+                    refit_plane(above, Plane{higher.normal, higher.d}, options.plane_distance),
+                    options.viewpoint);
         }
     }
     result.plane = plane;

@@ -122,6 +122,14 @@ TEST_F(RecognizerTest, PartsThatOneModelFitsBetterBecomeOneObject) {
         mean /= static_cast<double>(o.cluster.points.size());
         EXPECT_LT((mean - o.cluster.centroid.cast<double>()).norm(), 1e-4);
     }
+
+    // The least share of points a merged fit must explain is a share.
+    for (const double bad : {-0.1, 1.5, std::nan("")}) {
+        esf::RecognizerOptions options;
+        options.merge_min_inliers = bad;
+        EXPECT_CONTAINS(MESSAGE_OF(std::invalid_argument, esf::Recognizer(db_path_, options)),
+                        "merge_min_inliers");
+    }
 }
 
 /// A 1 m x 1 m table at z = 1 (camera frame, facing the camera) sampled every 5 mm.
