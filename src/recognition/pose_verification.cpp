@@ -21,6 +21,8 @@ namespace esf {
 
 namespace {
 
+constexpr std::size_t kNoMatch = std::numeric_limits<std::size_t>::max();  // no point (hint)
+
 // nanoflann's view of a point list.
 struct PointsAdaptor {
     const Points* points;
@@ -48,10 +50,24 @@ class NearestPoints {
     }
     // Index of the nearest point within sqrt(`radius_squared`), and the squared distance; false
     // when there is none. The bound prunes the search: cheaper than the nearest point and a
-    // test after.
-    bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t& index,
-                        float& squared) const {
+    // test after. A `hint` (a point likely to be near, such as the last ICP iteration's match)
+    // within the radius bounds it further: the search then looks only for strictly nearer
+    // points (the same answer but among points at exactly the same distance).
+    bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t hint,
+                        std::size_t& index, float& squared) const {
         NearestWithin result(std::nextafter(radius_squared, std::numeric_limits<float>::max()));
+        if (hint < points_.size()) {
+            const Eigen::Vector3f& h = points_[hint];
+            const float dx = q.x() - h.x(), dy = q.y() - h.y(), dz = q.z() - h.z();
+            float d = dx * dx;  // summed as nanoflann's L2 sums
+            d += dy * dy;
+            d += dz * dz;
+            if (d < result.best) {
+                result.best = d;
+                result.index = hint;
+                result.found = true;
+            }
+        }
         tree_.findNeighbors(result, q.data(), nanoflann::SearchParams());
         if (!result.found) return false;
         index = result.index;
@@ -302,44 +318,52 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
 
     // The model's samples that face the camera under `pose`.
     const std::size_t stride = std::max<std::size_t>(1, surface.points.size() / (4 * kIcpSamples));
-    const auto visible_samples = [&](const Eigen::Matrix4d& m, std::size_t step,
-                                     std::vector<Eigen::Vector3d>& points,
-                                     std::vector<Eigen::Vector3d>& normals) {
-        points.clear();
-        normals.clear();
-        const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
-        const Eigen::Vector3d t = m.topRightCorner<3, 1>();
-        for (std::size_t i = 0; i < surface.points.size(); i += step) {
-            const Eigen::Vector3d p = r * surface.points[i].cast<double>() + t;
-            const Eigen::Vector3d n = r * surface.normals[i].cast<double>();
-            if (n.dot(p) < 0.0) {  // facing the camera (the length does not change the sign)
-                points.push_back(p);
-                normals.push_back(n.normalized());
+    const auto visible_samples =
+        [&](const Eigen::Matrix4d& m, std::size_t step, std::vector<Eigen::Vector3d>& points,
+            std::vector<Eigen::Vector3d>& normals, std::vector<std::size_t>& indices) {
+            points.clear();
+            normals.clear();
+            indices.clear();
+            const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+            const Eigen::Vector3d t = m.topRightCorner<3, 1>();
+            for (std::size_t i = 0; i < surface.points.size(); i += step) {
+                const Eigen::Vector3d p = r * surface.points[i].cast<double>() + t;
+                const Eigen::Vector3d n = r * surface.normals[i].cast<double>();
+                if (n.dot(p) < 0.0) {  // facing the camera (the length does not change the sign)
+                    points.push_back(p);
+                    normals.push_back(n.normalized());
+                    indices.push_back(i);
+                }
             }
-        }
-    };
+        };
 
     // The object point nearest to a model point, within `radius` (the k-d tree). ICP pairs
     // points so: projective association (a point with the object points seen at its pixel) cost
     // accuracy on the real views and the pose benchmark (BENCHMARKS.md).
-    const auto pair = [&](const Eigen::Vector3d& p, Eigen::Vector3d& target, double radius) {
+    // Each surface sample's match of the last iteration starts its next search (the same
+    // answer, found sooner: BENCHMARKS.md, "Verification time").
+    std::vector<std::size_t> matches(surface.points.size(), kNoMatch);
+    const auto pair = [&](const Eigen::Vector3d& p, std::size_t sample, Eigen::Vector3d& target,
+                          double radius) {
         std::size_t index = 0;
         float squared_float = 0.0f;
-        if (!object.nearest_within(p.cast<float>(), static_cast<float>(radius * radius), index,
-                                   squared_float))
+        if (!object.nearest_within(p.cast<float>(), static_cast<float>(radius * radius),
+                                   matches[sample], index, squared_float))
             return false;
+        matches[sample] = index;
         target = object.points()[index].cast<double>();
         return true;
     };
 
     std::vector<Eigen::Vector3d> points, normals;
+    std::vector<std::size_t> indices;
     double scale = 1.0;  // relative to the surface's
     for (int iteration = 0; iteration < options.iterations; ++iteration) {
         const double radius =
             options.iterations > 1
                 ? 0.03 + (0.01 - 0.03) * iteration / static_cast<double>(options.iterations - 1)
                 : 0.02;
-        visible_samples(pose, stride, points, normals);
+        visible_samples(pose, stride, points, normals, indices);
         // Linearised about the samples' centre, so that rotation and translation separate;
         // point-to-plane with a little point-to-point, so that directions the normals leave
         // free (along a cylinder's axis) stay put.
@@ -359,7 +383,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         const std::size_t step = std::max<std::size_t>(1, points.size() / kIcpSamples);
         for (std::size_t i = 0; i < points.size(); i += step) {
             Eigen::Vector3d target;
-            if (!pair(points[i], target, radius)) continue;
+            if (!pair(points[i], indices[i], target, radius)) continue;
             const Eigen::Vector3d arm = points[i] - pivot;
             const Eigen::Vector3d d = target - points[i];
             Eigen::Matrix<double, 7, 1> row;
@@ -420,7 +444,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
     PoseFit out;
     out.model_to_camera = pose;
     out.scale = scale;
-    visible_samples(pose, 1, points, normals);
+    visible_samples(pose, 1, points, normals, indices);
     {
         // The object's points taken into the model's frame, where its k-d tree was built once:
         // the pose is scale times a rotation, so distances shrink by the scale there.
@@ -437,8 +461,8 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             const Eigen::Vector3d local = rotation_t * (q.cast<double>() - t) / scale;
             float squared = 0.0f;
             std::size_t m = 0;
-            if (!tree.nearest_within(local.cast<float>(), static_cast<float>(reach * reach), m,
-                                     squared))
+            if (!tree.nearest_within(local.cast<float>(), static_cast<float>(reach * reach),
+                                     kNoMatch, m, squared))
                 continue;
             const Eigen::Vector3d d = local - surface.points[m].cast<double>();
             const double along = scale * std::abs(d.dot(surface.normals[m].cast<double>()));
@@ -470,7 +494,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         // of the object than by the k-d tree of its samples, and the proving ground lost
         // (BENCHMARKS.md): the k-d tree stays.
         Eigen::Vector3d q;
-        if (pair(p, q, object_spacing + options.inlier_distance) &&
+        if (pair(p, indices[i], q, object_spacing + options.inlier_distance) &&
             std::abs((q - p).dot(normals[i])) < options.inlier_distance)
             ++supported;
     }
