@@ -41,8 +41,7 @@ void study(const std::string& db_path, const std::string& csv, const std::string
         "violations,rms_mm,scale,verified\n");
     for (const esf::TestSample& sample : test_set.samples) {
         if (!only.empty() && sample.class_name != only) continue;
-        const esf::FinitePoints cloud =
-            esf::drop_non_finite(esf::read_cloud(sample.file).points);
+        const esf::FinitePoints cloud = esf::drop_non_finite(esf::read_cloud(sample.file).points);
         const esf::QueryDescriptor d = recognizer.describe(cloud.points);
         const esf::Classification knn = recognizer.classify_descriptor(d.signatures);
         const esf::PreparedObservation observation(esf::Observation{cloud.points, nullptr},
@@ -60,8 +59,8 @@ void study(const std::string& db_path, const std::string& csv, const std::string
                 if (!surface) throw std::runtime_error(db_path + ": no stored surface of " + key);
                 model = std::make_shared<esf::PreparedModel>(std::move(*surface));
             }
-            const esf::PoseFit fit = esf::fit_model(*model, n.pose.cast<double>(), observation, vo,
-                                                    scales[key] != 1.0);
+            const esf::PoseFit fit =
+                esf::fit_model(*model, n.pose.cast<double>(), observation, vo, scales[key] != 1.0);
             std::printf("%s,%s,%zu,%s,%s,%.4f,%.3f,%.3f,%.3f,%.3f,%.2f,%.3f,%d\n",
                         fs::path(sample.file).filename().c_str(), sample.class_name.c_str(), i,
                         n.class_name.c_str(), n.model_name.c_str(), n.distance, fit.fit.score(),
