@@ -15,6 +15,7 @@
 #include "core/elapsed_time.hpp"
 #include "esf/core/error.hpp"
 #include "esf/evaluation/pose_accuracy.hpp"
+#include "esf/evaluation/scene_truth.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "esf/recognition/pose_verification.hpp"
@@ -38,50 +39,6 @@ double SceneTypeSummary::end_to_end() const { return ratio(correct, labelled); }
 double SceneTypeSummary::pose_rate() const { return ratio(pose_correct, posed); }
 
 namespace {
-
-// truth.json of a generated scene set: each object's model and pose, by (file name, object id).
-struct TruthObject {
-    std::string model;  // relative to the root
-    std::string class_name;
-    Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
-    double visible = 0.0;
-};
-
-struct SceneTruth {
-    std::string root;
-    std::map<std::pair<std::string, std::uint32_t>, TruthObject> objects;
-};
-
-std::optional<SceneTruth> read_truth(const std::string& scene_set) {
-    const fs::path path = fs::path(scene_set).parent_path() / "truth.json";
-    if (!fs::is_regular_file(path)) return std::nullopt;
-    std::ifstream in(path);
-    nlohmann::json j;
-    try {
-        in >> j;
-        SceneTruth truth;
-        truth.root = j.at("root").get<std::string>();
-        for (const auto& scene : j.at("scenes"))
-            for (const auto& o : scene.at("objects")) {
-                TruthObject t;
-                t.model = o.at("model").get<std::string>();
-                t.class_name = o.at("class").get<std::string>();
-                t.visible = o.at("visible").get<double>();
-                const auto& m = o.at("pose");
-                if (m.size() != 16)
-                    throw std::invalid_argument("a pose of " + std::to_string(m.size()) +
-                                                " numbers");
-                for (int k = 0; k < 16; ++k)
-                    t.pose(k / 4, k % 4) = m.at(static_cast<std::size_t>(k)).get<double>();
-                truth.objects[{scene.at("file").get<std::string>(),
-                               o.at("object_id").get<std::uint32_t>()}] = t;
-            }
-        return truth;
-    } catch (const std::exception& e) {
-        throw IoError(
-            file_message(path.string(), 0, std::string("not a scene truth file: ") + e.what()));
-    }
-}
 
 // Points on each true model's surface (mesh file coordinates), loaded once.
 class ModelPoints {
@@ -213,7 +170,7 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
     report.grouping =
         options.segmentation.grouping == Grouping::kConvexity ? "convexity" : "euclidean";
     std::map<std::string, SceneTypeSummary> types;
-    const std::optional<SceneTruth> truth = read_truth(set.path);
+    const std::optional<SceneTruth> truth = read_scene_truth(set.path);
     std::optional<ModelPoints> model_points;
     std::set<std::pair<std::string, std::string>> held;  // (class, model name) of the database
     if (truth) {

@@ -11,12 +11,15 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
 
+#include "esf/core/error.hpp"
 #include "esf/evaluation/pose_accuracy.hpp"
 #include "esf/evaluation/scene_evaluation.hpp"
+#include "esf/evaluation/scene_truth.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "esf/recognition/recognizer.hpp"
@@ -127,6 +130,49 @@ TEST_F(GeneratedScenesTest, SameFilesAtAnyThreadCountAndTruthMatchesLabels) {
                 EXPECT_EQ(s.type, scene["type"].get<std::string>());
             }
     }
+}
+
+TEST_F(GeneratedScenesTest, TheTruthReadsBackAndABrokenOneIsRefusedByName) {
+    esf::SceneGenerationOptions options;
+    options.scenes = 3;
+    options.clutter.seed = 5;
+    esf::generate_scenes(root_.string(), (base_ / "t").string(), options);
+    const std::string csv = (base_ / "t" / "scenes.csv").string();
+    const std::optional<esf::SceneTruth> truth = esf::read_scene_truth(csv);
+    ASSERT_TRUE(truth);
+    EXPECT_EQ(fs::path(truth->root), root_);
+    const nlohmann::json json = nlohmann::json::parse(read_bytes(base_ / "t" / "truth.json"));
+    std::size_t objects = 0;
+    for (const auto& scene : json["scenes"])
+        for (const auto& o : scene["objects"]) {
+            ++objects;
+            const auto it = truth->objects.find({scene["file"], o["object_id"]});
+            ASSERT_NE(it, truth->objects.end());
+            EXPECT_EQ(it->second.model, o["model"].get<std::string>());
+            EXPECT_EQ(it->second.class_name, o["class"].get<std::string>());
+            EXPECT_EQ(it->second.visible, o["visible"].get<double>());
+            for (int k = 0; k < 16; ++k)
+                EXPECT_EQ(it->second.pose(k / 4, k % 4), o["pose"][k].get<double>());
+        }
+    EXPECT_EQ(truth->objects.size(), objects);
+
+    // No truth beside a scene set: nothing to judge poses by.
+    fs::create_directories(base_ / "none");
+    EXPECT_FALSE(esf::read_scene_truth((base_ / "none" / "scenes.csv").string()));
+    // A pose of 15 numbers, or a truncated file: refused, naming the file.
+    nlohmann::json broken = json;
+    broken["scenes"][0]["objects"][0]["pose"].erase(0);
+    std::ofstream(base_ / "t" / "truth.json") << broken.dump();
+    try {
+        esf::read_scene_truth(csv);
+        FAIL() << "a pose of 15 numbers was read";
+    } catch (const esf::IoError& e) {
+        EXPECT_NE(std::string(e.what()).find("truth.json"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("15 numbers"), std::string::npos) << e.what();
+    }
+    const std::string text = json.dump();
+    std::ofstream(base_ / "t" / "truth.json") << text.substr(0, text.size() / 2);
+    EXPECT_THROW(esf::read_scene_truth(csv), esf::IoError);
 }
 
 TEST_F(GeneratedScenesTest, FoldsKeepScenesAwayFromTheTrainingSide) {
