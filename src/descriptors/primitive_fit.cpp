@@ -145,9 +145,11 @@ double best_cylinder_share(std::span<const SurfaceCell> cells, std::span<const s
         const double radius = tu[0];
         if (!(radius > 0.01 && radius < 0.6 * extent + 0.01) || !(tu[1] > 0.0)) continue;
         const Cylinder cyl{axis, pa - radius * na, radius};
+        // Counted until the cells left cannot lift it above the best (the same choice, sooner).
         std::size_t count = 0;
-        for (const std::size_t i : scored) {
-            const auto [side, lid] = cylinder_part(cells[i], cyl, tol);
+        for (std::size_t k = 0; k < scored.size() && count + (scored.size() - k) > best_count;
+             ++k) {
+            const auto [side, lid] = cylinder_part(cells[scored[k]], cyl, tol);
             count += side || lid;
         }
         if (count > best_count) {
@@ -190,7 +192,9 @@ double best_box_share(std::span<const SurfaceCell> cells, std::span<const std::s
                 }))
                 continue;
             std::size_t count = 0;
-            for (const std::size_t i : scored) count += on_face(i, cells[s]);
+            for (std::size_t k = 0; k < scored.size() && count + (scored.size() - k) > best_count;
+                 ++k)
+                count += on_face(scored[k], cells[s]);
             if (count > best_count) {
                 best_count = count;
                 best_seed = s;
