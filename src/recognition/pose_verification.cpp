@@ -341,7 +341,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
     // points so: projective association (a point with the object points seen at its pixel) cost
     // accuracy on the real views and the pose benchmark (BENCHMARKS.md).
     // Each surface sample's match of the last iteration starts its next search (the same
-    // answer, found sooner: BENCHMARKS.md, "Verification time").
+    // answer, found sooner: BENCHMARKS.md, "Each ICP search starts from the sample's last match").
     std::vector<std::size_t> matches(surface.points.size(), kNoMatch);
     const auto pair = [&](const Eigen::Vector3d& p, std::size_t sample, Eigen::Vector3d& target,
                           double radius) {
