@@ -21,8 +21,8 @@ struct RecognizerArgs {
     bool every_view = false;
 };
 
-/// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --no-merge-parts,
-/// --verify-within-class:
+/// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --shape-weight W,
+/// --no-merge-parts, --verify-within-class:
 /// hypothesis verification (on by default, with the surfaces the database stores).
 inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
     cmd.add_flag_callback(
@@ -42,6 +42,11 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
                    "ends the search: the farther candidates are not fitted (2: fit them all; "
                    "0.7: a fifth faster, a few more cans named box)")
         ->check(CLI::Range(-1.0, 2.0))
+        ->capture_default_str();
+    cmd.add_option("--shape-weight", options.verification.shape_weight,
+                   "Candidates compete by fit score less this times the gap between the "
+                   "object's cylinder-box contrast and the model's (0: the score alone)")
+        ->check(CLI::Range(0.0, 2.0))
         ->capture_default_str();
     cmd.add_flag_callback(
         "--no-merge-parts", [&options] { options.merge_parts = false; },

@@ -136,7 +136,7 @@ constexpr std::array<int, kSurfaceAngleBlocks + 1> kSurfaceBlockSizes = {
     kSurfaceAngleBins,     kSurfaceAngleBins,     kSurfaceAngleBins, kSurfaceAngleBins,
     kSurfaceViewpointBins, kSurfaceVariationBins, kPrimitiveBins};
 constexpr std::array<const char*, kSurfaceAngleBlocks + 1> kSurfaceBlockNames = {
-    "alpha", "phi", "theta", "s", "beta", "sigma", "cylinder-box"};
+    "alpha", "phi", "theta", "s", "beta", "sigma", kPrimitiveBlockName};
 
 /// What each baseline computes: known without loading the module.
 DescriptorInfo baseline_info(const std::string& name) {

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -264,6 +265,20 @@ PrimitiveHistogram primitive_histogram(const PrimitiveFit& fit) {
     h[static_cast<std::size_t>(low)] = static_cast<float>(1.0 - high_share);
     h[static_cast<std::size_t>(low + 1)] = static_cast<float>(high_share);
     return h;
+}
+
+double primitive_contrast(std::span<const float> histogram) {
+    if (histogram.size() != static_cast<std::size_t>(kPrimitiveBins))
+        return std::numeric_limits<double>::quiet_NaN();
+    constexpr double kWidth = 2.0 / kPrimitiveBins;
+    double sum = 0.0, weighted = 0.0;
+    for (std::size_t k = 0; k < histogram.size(); ++k) {
+        const double share = histogram[k];
+        sum += share;
+        weighted += share * (-1.0 + (static_cast<double>(k) + 0.5) * kWidth);
+    }
+    return sum > 0.0 && std::isfinite(sum) ? weighted / sum
+                                           : std::numeric_limits<double>::quiet_NaN();
 }
 
 }  // namespace esf

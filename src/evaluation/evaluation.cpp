@@ -311,6 +311,7 @@ EvaluationReport evaluate_test_set(const Recognizer& recognizer, const TestSet& 
         if (recognizer.verifies() && !nearest.empty()) {
             // The best-fitting candidate first (Recognizer::verify), the others in order.
             Classification c = classify_neighbours(nearest, labels);
+            c.shape_contrast = recognizer.shape_contrast(d.signatures);
             try {
                 recognizer.verify(c, Observation{drop_non_finite(points).points, nullptr});
             } catch (const std::exception& e) {

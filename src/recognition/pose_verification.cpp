@@ -210,6 +210,7 @@ void validate(const VerificationOptions& o) {
     if (!(o.accept_score >= -1.0 && o.accept_score <= 2.0)) fail("accept score must be in [-1, 2]");
     if (!(o.prior_tolerance >= 0.0 && o.prior_tolerance <= 2.0))
         fail("prior tolerance must be in [0, 2]");
+    if (!(o.shape_weight >= 0.0 && o.shape_weight <= 2.0)) fail("shape weight must be in [0, 2]");
     if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
         fail("inlier distance must be in (0, 1) m");
     if (!(o.violation_margin > 0.0 && o.violation_margin < 1.0))

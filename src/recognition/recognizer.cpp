@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -17,6 +18,7 @@
 #include "core/splitmix64.hpp"
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
+#include "esf/descriptors/primitive_fit.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "esf/recognition/knn_index.hpp"
 #include "esf/training/descriptor_settings.hpp"
@@ -135,6 +137,10 @@ struct Recognizer::Impl {
     std::unique_ptr<Describer> describer;
     std::unique_ptr<Classifier> classifier;
     std::size_t dimension = 0;
+    // Where the descriptor's cylinder-box block lies (size 0: none), and each model's mean
+    // contrast over its views (NaN: none), by model id.
+    std::size_t primitive_offset = 0, primitive_size = 0;
+    std::vector<double> model_contrast;
     std::vector<ModelInfo> models;  // by model id (DescriptorMatrix::models)
     // Verification: each model's surface (stored, or sampled from its mesh) and its k-d tree,
     // loaded on first use; `stored` reads the database's surfaces (under surfaces_mutex).
@@ -221,6 +227,18 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
              std::to_string(matrix.models.size()) + " complete models)");
     const auto dim = static_cast<std::size_t>(kind.dimension);
     impl_->dimension = dim;
+    {
+        const DescriptorInfo info = descriptor_info(kind.name);
+        std::size_t offset = 0;
+        for (std::size_t b = 0; b < info.blocks.size() && b < info.block_names.size(); ++b) {
+            const auto size = static_cast<std::size_t>(info.blocks[b]);
+            if (info.block_names[b] == kPrimitiveBlockName && offset + size <= dim) {
+                impl_->primitive_offset = offset;
+                impl_->primitive_size = size;
+            }
+            offset += size;
+        }
+    }
 
     KnnIndexOptions index_options;
     index_options.threads = options.threads;
@@ -302,6 +320,28 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     classifier_options.vote = options.vote;
     impl_->classifier =
         std::make_unique<Classifier>(std::move(index), std::move(labels), classifier_options);
+    // Each model's mean cylinder-box contrast over its views, for verification's shape term.
+    impl_->model_contrast.assign(impl_->models.size(), std::numeric_limits<double>::quiet_NaN());
+    if (impl_->primitive_size > 0) {
+        const Classifier& classifier = *impl_->classifier;
+        std::vector<double> sum(impl_->models.size(), 0.0);
+        std::vector<std::size_t> count(impl_->models.size(), 0);
+        for (std::size_t r = 0; r < classifier.labels().size(); ++r) {
+            const auto model = static_cast<std::size_t>(classifier.labels()[r].model_id);
+            const double contrast = shape_contrast(classifier.index().row(r));
+            if (model >= sum.size() || !std::isfinite(contrast)) continue;
+            sum[model] += contrast;
+            ++count[model];
+        }
+        for (std::size_t m = 0; m < sum.size(); ++m)
+            if (count[m] > 0) impl_->model_contrast[m] = sum[m] / static_cast<double>(count[m]);
+    }
+}
+
+double Recognizer::shape_contrast(std::span<const float> signatures) const {
+    if (impl_->primitive_size == 0 || signatures.size() < impl_->dimension)
+        return std::numeric_limits<double>::quiet_NaN();
+    return primitive_contrast(signatures.subspan(impl_->primitive_offset, impl_->primitive_size));
 }
 
 Recognizer::~Recognizer() = default;
@@ -338,13 +378,20 @@ Classification Recognizer::classify_descriptor(std::span<const float> signatures
             "recognizer: a descriptor of " + std::to_string(signatures.size()) +
             " floats is not one or more signatures of " + std::to_string(dim));
     const Classifier& classifier = *impl_->classifier;
-    if (signatures.size() == dim) return classifier.classify(signatures);
-    std::vector<KnnResult> results;
-    for (std::size_t s = 0; s < signatures.size(); s += dim)
-        results.push_back(classifier.index().search(signatures.subspan(s, dim), impl_->options.k));
-    const std::vector<KnnNeighbour> neighbours =
-        merge_neighbours(results, impl_->options.k, classifier.index());
-    return classify_neighbours(neighbours, classifier.labels(), classifier.options().vote);
+    Classification out;
+    if (signatures.size() == dim) {
+        out = classifier.classify(signatures);
+    } else {
+        std::vector<KnnResult> results;
+        for (std::size_t s = 0; s < signatures.size(); s += dim)
+            results.push_back(
+                classifier.index().search(signatures.subspan(s, dim), impl_->options.k));
+        const std::vector<KnnNeighbour> neighbours =
+            merge_neighbours(results, impl_->options.k, classifier.index());
+        out = classify_neighbours(neighbours, classifier.labels(), classifier.options().vote);
+    }
+    out.shape_contrast = shape_contrast(signatures);
+    return out;
 }
 
 std::vector<CloudClassification> Recognizer::classify_batch(
@@ -368,8 +415,11 @@ std::vector<CloudClassification> Recognizer::classify_batch(
     if (!batch_items.empty()) {
         std::vector<Classification> results =
             impl_->classifier->classify_batch(batch, impl_->options.threads);
-        for (std::size_t j = 0; j < batch_items.size(); ++j)
-            out[batch_items[j]].classification = std::move(results[j]);
+        for (std::size_t j = 0; j < batch_items.size(); ++j) {
+            Classification& c = out[batch_items[j]].classification;
+            c = std::move(results[j]);
+            c.shape_contrast = shape_contrast(descriptors[batch_items[j]].signatures);
+        }
     }
     parallel_for(other_items.size(), impl_->options.threads, [&](std::size_t j) {
         const std::size_t i = other_items[j];
@@ -471,9 +521,18 @@ void Recognizer::verify(Classification& c, const Observation& observation,
         }
     }
     if (picks.empty()) return;
+    // Compared by score, less the shape term where both contrasts are known.
+    const auto compared = [&](std::size_t j) {
+        const auto model = static_cast<std::size_t>(c.neighbours[picks[j]].model_id);
+        const double model_contrast = model < impl_->model_contrast.size()
+                                          ? impl_->model_contrast[model]
+                                          : std::numeric_limits<double>::quiet_NaN();
+        const double term = o.shape_weight * std::abs(model_contrast - c.shape_contrast);
+        return fits[j].fit.score() - (std::isfinite(term) ? term : 0.0);
+    };
     std::size_t best = 0;
     for (std::size_t j = 1; j < fits.size(); ++j)
-        if (fits[j].fit.score() > fits[best].fit.score()) best = j;
+        if (compared(j) > compared(best)) best = j;
 
     // The best fit first, the other neighbours in their order.
     const std::size_t chosen = picks[best];

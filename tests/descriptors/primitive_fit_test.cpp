@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/csv.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -153,6 +155,28 @@ TEST(PrimitiveHistogram, TheContrastSplitsBetweenTheTwoNearestBinCentres) {
         h = primitive_histogram(fit);
         EXPECT_NEAR(std::accumulate(h.begin(), h.end(), 0.0), 1.0, 1e-6) << c;
     }
+}
+
+TEST(PrimitiveHistogram, TheContrastReadsBackFromAHistogramScaledOrNot) {
+    // Within the outer bin centres the histogram's interpolation is undone exactly; beyond them
+    // the contrast reads as the outer centre; a block scaled as a signature stores it reads the
+    // same; a histogram of another size or with nothing in it reads as NaN.
+    PrimitiveFit fit;
+    for (const double c : {-0.875, -0.7, -0.3, 0.0, 0.41, 0.875}) {
+        fit.cylinder = std::max(c, 0.0);
+        fit.box = std::max(-c, 0.0);
+        PrimitiveHistogram h = primitive_histogram(fit);
+        EXPECT_NEAR(primitive_contrast(h), c, 1e-6) << c;
+        for (float& v : h) v *= 0.03f;
+        EXPECT_NEAR(primitive_contrast(h), c, 1e-6) << c << ", scaled";
+    }
+    fit.cylinder = 1.0;
+    fit.box = 0.0;
+    EXPECT_NEAR(primitive_contrast(primitive_histogram(fit)), 0.875, 1e-6);
+    const std::vector<float> short_block(kPrimitiveBins - 1, 0.1f);
+    EXPECT_TRUE(std::isnan(primitive_contrast(short_block)));
+    const std::vector<float> empty_block(kPrimitiveBins, 0.0f);
+    EXPECT_TRUE(std::isnan(primitive_contrast(empty_block)));
 }
 
 /// The oracle is the label of each real segmented view: the solid that explains a can's view

@@ -226,6 +226,14 @@ TEST(FitModel, RejectsBadInput) {
     EXPECT_THROW(esf::validate(bad), std::invalid_argument);
     bad.prior_tolerance = 0.0;
     EXPECT_NO_THROW(esf::validate(bad));
+    bad.shape_weight = -0.1;
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.shape_weight = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.shape_weight = 2.5;
+    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
+    bad.shape_weight = 0.0;
+    EXPECT_NO_THROW(esf::validate(bad));
 }
 
 }  // namespace

@@ -17,6 +17,8 @@
 
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
+#include "esf/descriptors/descriptor.hpp"
+#include "esf/descriptors/primitive_fit.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/recognition/knn_index.hpp"
 #include "esf/recognition/recognizer.hpp"
@@ -185,6 +187,33 @@ TEST(RecognizerErrors, BadOptionsAndSeveralKinds) {
     esf::RecognizerOptions pick;
     pick.descriptor = "esf";
     EXPECT_EQ(esf::Recognizer(path, pick).info().views, 6u);
+    fs::remove_all(dir);
+}
+
+TEST(RecognizerShape, TheQueryContrastIsItsDescriptorsCylinderBoxBlock) {
+    const fs::path dir = temp_dir();
+    const std::string angles = (dir / "angles.sqlite").string();
+    const std::string plain = (dir / "plain.sqlite").string();
+    const esf::DescriptorKind kind{
+        "esf-angles", esf::kEsfVersion * 100 + esf::kSurfaceAnglesVersion, esf::kEsfAnglesSize};
+    write_random_database(angles, kind, {}, 2, 3);
+    write_random_database(plain, kEsfKind, {}, 2, 3);
+    // A signature whose last block (the cylinder-box contrast) says 0.3, scaled as stored.
+    std::vector<float> query(static_cast<std::size_t>(esf::kEsfAnglesSize), 0.001f);
+    esf::PrimitiveFit fit;
+    fit.cylinder = 0.3;
+    const esf::PrimitiveHistogram h = esf::primitive_histogram(fit);
+    std::transform(h.begin(), h.end(), query.end() - esf::kPrimitiveBins,
+                   [](float v) { return 0.05f * v; });
+    const esf::Recognizer recognizer(angles);
+    EXPECT_NEAR(recognizer.shape_contrast(query), 0.3, 1e-6);
+    EXPECT_NEAR(recognizer.classify_descriptor(query).shape_contrast, 0.3, 1e-6);
+    EXPECT_TRUE(std::isnan(recognizer.shape_contrast(std::span(query).first(10))));
+    // ESF alone has no such block.
+    const esf::Recognizer esf_only(plain);
+    const std::vector<float> esf_query(static_cast<std::size_t>(esf::kEsfSize), 0.001f);
+    EXPECT_TRUE(std::isnan(esf_only.shape_contrast(esf_query)));
+    EXPECT_TRUE(std::isnan(esf_only.classify_descriptor(esf_query).shape_contrast));
     fs::remove_all(dir);
 }
 

@@ -62,4 +62,13 @@ using PrimitiveHistogram = std::array<float, kPrimitiveBins>;
 /// histograms grows with the difference of their contrasts up to two bins apart.
 PrimitiveHistogram primitive_histogram(const PrimitiveFit& fit);
 
+/// The name of that histogram's block in a descriptor (DescriptorInfo::block_names).
+inline constexpr const char* kPrimitiveBlockName = "cylinder-box";
+
+/// The contrast a histogram of primitive_histogram() stands for (a block of a stored signature
+/// may be scaled: only the shares of its bins count): the mean of the bin centres weighted by
+/// the bins, so the contrast itself within [-1 + w / 2, 1 - w / 2] (w the bin width). NaN for a
+/// histogram of another size, or with no positive sum.
+double primitive_contrast(std::span<const float> histogram);
+
 }  // namespace esf

@@ -21,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -99,6 +100,9 @@ struct Classification {
     /// included), not the training view's; the neighbours are reordered, best fit first.
     std::optional<FitScore> fit;
     bool verified = false;  ///< a candidate met the verification thresholds
+    /// The query's cylinder-box contrast (primitive_contrast of its descriptor's block); NaN
+    /// where the descriptor has no such block or the classification came from neighbours alone.
+    double shape_contrast = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// Makes `n` the classification's choice: class, model, view, index, distance and pose (the

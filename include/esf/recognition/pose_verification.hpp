@@ -54,6 +54,12 @@ struct VerificationOptions {
     /// stood; verified again with a score at most this much below its former one, it is kept and
     /// no other candidate is fitted (>= 0).
     double prior_tolerance = 0.1;
+    /// The candidates are compared by their fit's score() less this times the distance between
+    /// the object's cylinder-box contrast and the mean contrast of the candidate's training views
+    /// (descriptors with that block, primitive_fit.hpp): a box fitted inside a can's front loses
+    /// to a can model that fits about as well (BENCHMARKS.md, "Shape agreement"). In [0, 2]; 0:
+    /// the score alone. The chosen fit's own score is reported unchanged.
+    double shape_weight = 0.25;
     int iterations = 10;                ///< ICP iterations (>= 1)
     std::size_t surface_points = 2000;  ///< samples of each model's surface
     double inlier_distance = 0.004;     ///< metres

@@ -194,6 +194,10 @@ class Recognizer {
     /// k nearest views of a descriptor (signatures.size() a positive multiple of the dimension)
     /// and their vote. Throws std::invalid_argument for a wrong size or non-finite values.
     Classification classify_descriptor(std::span<const float> signatures) const;
+    /// The cylinder-box contrast of a descriptor's first signature (what verification weighs with
+    /// VerificationOptions::shape_weight); NaN when the descriptor has no such block or
+    /// `signatures` is shorter than one signature.
+    double shape_contrast(std::span<const float> signatures) const;
     /// Classifies described clouds as one batch; failed descriptors pass their error on.
     std::vector<CloudClassification> classify_batch(
         std::span<const QueryDescriptor> descriptors) const;
