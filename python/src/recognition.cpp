@@ -182,9 +182,11 @@ void bind_recognition(py::module_& m) {
         .def(py::init([](const fs::path& database, std::size_t k, const std::string& descriptor,
                          bool use_weights, int samplings, const std::string& vote, bool every_view,
                          int threads, bool verify, const std::optional<fs::path>& verify_meshes,
-                         std::size_t candidates, bool verify_within_class, bool merge_parts) {
+                         std::size_t candidates, bool verify_within_class, bool merge_parts,
+                         double shape_weight) {
                  RecognizerOptions options;
                  options.merge_parts = merge_parts;
+                 options.verification.shape_weight = shape_weight;
                  options.verify = verify;
                  if (verify_meshes) options.verification_meshes = verify_meshes->string();
                  options.verification.candidates = candidates;
@@ -212,6 +214,7 @@ void bind_recognition(py::module_& m) {
              py::arg("candidates") = defaults.verification.candidates,
              py::arg("verify_within_class") = !defaults.verification.decide_class,
              py::arg("merge_parts") = defaults.merge_parts,
+             py::arg("shape_weight") = defaults.verification.shape_weight,
              "Opens DATABASE (esf train ... -o DATABASE): the ``k`` nearest models (each by its "
              "nearest view; ``every_view``: the k nearest views) are the neighbours; ``vote`` "
              "'nearest' names the nearest one's class (the others give the confidence), "
@@ -225,7 +228,9 @@ void bind_recognition(py::module_& m) {
              "model and pose: ``Classification.pose`` is the fitted pose and ``.fit`` its "
              "score; ``verification`` says whether it is on. In scenes with a frame, "
              "``merge_parts`` makes two neighbouring objects one when one model fitted to both "
-             "explains them better than their own fits. Raises "
+             "explains them better than their own fits. ``shape_weight`` (0 to 2): candidates "
+             "compete by fit score less this times the gap between the object's and the "
+             "model's cylinder-box contrast. Raises "
              "FileNotFoundError / "
              "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")

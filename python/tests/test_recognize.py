@@ -129,6 +129,11 @@ def test_render_and_scene(meshes, database):
     # A cloud that is no sensor's image has no frame to merge parts against: as segmented.
     apart = esf.Recognizer(database, merge_parts=False).scene(scene)
     assert [len(o.points) for o in apart] == [len(o.points) for o in objects]
+    # The shape term only reorders candidates: without it the objects are the same clusters.
+    plain = esf.Recognizer(database, shape_weight=0.0).scene(scene)
+    assert [len(o.points) for o in plain] == [len(o.points) for o in objects]
+    with pytest.raises(ValueError, match="shape weight"):
+        esf.Recognizer(database, shape_weight=3.0)
 
 
 def test_train_progress_interrupt_and_resume(tmp_path, meshes):
