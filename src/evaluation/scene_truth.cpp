@@ -3,6 +3,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -27,14 +28,19 @@ std::optional<SceneTruth> read_scene_truth(const std::string& scene_set) {
                 t.model = o.at("model").get<std::string>();
                 t.class_name = o.at("class").get<std::string>();
                 t.visible = o.at("visible").get<double>();
+                if (!(t.visible >= 0.0 && t.visible <= 1.0))
+                    throw std::invalid_argument("a visible share of " + std::to_string(t.visible));
                 const auto& m = o.at("pose");
-                if (m.size() != 16)
+                if (!m.is_array() || m.size() != 16)
                     throw std::invalid_argument("a pose of " + std::to_string(m.size()) +
                                                 " numbers");
                 for (int k = 0; k < 16; ++k)
                     t.pose(k / 4, k % 4) = m.at(static_cast<std::size_t>(k)).get<double>();
+                const auto id = o.at("object_id").get<std::int64_t>();
+                if (id < 0 || id > std::numeric_limits<std::uint32_t>::max())
+                    throw std::invalid_argument("an object id of " + std::to_string(id));
                 truth.objects[{scene.at("file").get<std::string>(),
-                               o.at("object_id").get<std::uint32_t>()}] = t;
+                               static_cast<std::uint32_t>(id)}] = t;
             }
         return truth;
     } catch (const std::exception& e) {

@@ -173,6 +173,28 @@ TEST_F(GeneratedScenesTest, TheTruthReadsBackAndABrokenOneIsRefusedByName) {
     const std::string text = json.dump();
     std::ofstream(base_ / "t" / "truth.json") << text.substr(0, text.size() / 2);
     EXPECT_THROW(esf::read_scene_truth(csv), esf::IoError);
+    // Hostile values: a negative id, a visible share above 1, a pose beyond double's range.
+    const auto refused = [&](const std::string& file, const std::string& reason) {
+        std::ofstream(base_ / "t" / "truth.json") << file;
+        try {
+            esf::read_scene_truth(csv);
+            ADD_FAILURE() << "read: " << reason;
+        } catch (const esf::IoError& e) {
+            EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+        }
+    };
+    nlohmann::json hostile = json;
+    hostile["scenes"][0]["objects"][0]["object_id"] = -3;
+    refused(hostile.dump(), "an object id of -3");
+    hostile = json;
+    hostile["scenes"][0]["objects"][0]["visible"] = 1.5;
+    refused(hostile.dump(), "a visible share of 1.5");
+    hostile = json;
+    hostile["scenes"][0]["objects"][0]["pose"][3] = 7.25;
+    std::string overflowing = hostile.dump();
+    const std::size_t at = overflowing.find("7.25");
+    ASSERT_NE(at, std::string::npos);
+    refused(overflowing.replace(at, 4, "1e999"), "number overflow");
 }
 
 TEST_F(GeneratedScenesTest, FoldsKeepScenesAwayFromTheTrainingSide) {

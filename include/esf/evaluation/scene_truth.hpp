@@ -26,7 +26,8 @@ struct SceneTruth {
 
 /// Reads truth.json beside the scene set CSV `scene_set` (its folder); std::nullopt when there is
 /// none. Throws esf::IoError naming the file for one that is not a scene truth file (bad JSON, a
-/// missing field, a pose that is not 16 numbers).
+/// number beyond double's range, a missing field, a pose that is not 16 numbers, an object id
+/// outside [0, 2^32 - 1], a visible share outside [0, 1]).
 std::optional<SceneTruth> read_scene_truth(const std::string& scene_set);
 
 }  // namespace esf
