@@ -391,10 +391,10 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             row.head<3>() = arm.cross(normals[i]);
             row.segment<3>(3) = normals[i];
             row(6) = arm.dot(normals[i]);
-            ata.selfadjointView<Eigen::Lower>().rankUpdate(row);
+            ata.noalias() += row * row.transpose();  // inlined: Eigen's rankUpdate is a call
             atb += row * d.dot(normals[i]);
             arm_squared += arm.squaredNorm();
-            arm_outer.selfadjointView<Eigen::Lower>().rankUpdate(arm);
+            arm_outer.noalias() += arm * arm.transpose();
             arm_sum += arm;
             arm_cross_d += arm.cross(d);
             d_sum += d;
@@ -402,8 +402,6 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             ++pairs;
         }
         if (pairs < 7) break;
-        ata.triangularView<Eigen::StrictlyUpper>() = ata.transpose();
-        arm_outer.triangularView<Eigen::StrictlyUpper>() = arm_outer.transpose();
         {
             Eigen::Matrix3d skew;  // [arm_sum]x
             skew << 0.0, -arm_sum.z(), arm_sum.y(), arm_sum.z(), 0.0, -arm_sum.x(), -arm_sum.y(),
