@@ -6,6 +6,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -55,7 +57,10 @@ class NearestPoints {
     // points (the same answer but among points at exactly the same distance).
     bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t hint,
                         std::size_t& index, float& squared) const {
-        NearestWithin result(std::nextafter(radius_squared, std::numeric_limits<float>::max()));
+        // The next float up, so that a point at exactly the radius counts (std::nextafter for a
+        // positive finite bound, without the call).
+        NearestWithin result(
+            std::bit_cast<float>(std::bit_cast<std::uint32_t>(radius_squared) + 1u));
         if (hint < points_.size()) {
             const Eigen::Vector3f& h = points_[hint];
             const float dx = q.x() - h.x(), dy = q.y() - h.y(), dz = q.z() - h.z();
@@ -179,10 +184,7 @@ class SeenSpace {
     static constexpr long kSlack = 2;
 
     bool project(const Eigen::Vector3d& p, long& u, long& v) const {
-        if (!(p.z() > 1e-6)) return false;
-        u = std::lround(camera_.fx * p.x() / p.z() + camera_.cx);
-        v = std::lround(camera_.fy * p.y() / p.z() + camera_.cy);
-        return u >= 0 && v >= 0 && u < static_cast<long>(width_) && v < static_cast<long>(height_);
+        return p.z() > 1e-6 && camera_.pixel(p.x(), p.y(), p.z(), u, v);
     }
 
     CameraIntrinsics camera_;

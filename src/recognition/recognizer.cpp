@@ -637,10 +637,8 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         held.clear();
         for (std::size_t i = 0; i < objects.size(); ++i)
             for (const Eigen::Vector3f& p : objects[i].cluster.points) {
-                if (!(p.z() > 0.0f)) continue;
-                const long u = std::lround(camera.fx * p.x() / p.z() + camera.cx);
-                const long v = std::lround(camera.fy * p.y() / p.z() + camera.cy);
-                if (u < 0 || v < 0 || u >= width || v >= height) continue;
+                long u = 0, v = 0;
+                if (!camera.pixel(p.x(), p.y(), p.z(), u, v)) continue;
                 const auto pixel = static_cast<std::size_t>(v * width + u);
                 if (owner[pixel] < 0) held.push_back(pixel);
                 owner[pixel] = static_cast<int>(i);

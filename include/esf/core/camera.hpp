@@ -37,6 +37,16 @@ struct CameraIntrinsics {
         return c;
     }
 
+    /// The pixel that the point (x, y, z) falls on: (u, v) rounded to the nearest integers, halves
+    /// away from zero (as std::lround, inlined: this runs for every point of every hypothesis).
+    /// False where z is not positive or the pixel lies outside the image.
+    bool pixel(double x, double y, double z, long& u, long& v) const {
+        if (!(z > 0.0)) return false;
+        u = nearest_integer(fx * x / z + cx);
+        v = nearest_integer(fy * y / z + cy);
+        return u >= 0 && v >= 0 && u < width && v < height;
+    }
+
     /// Throws std::invalid_argument unless the size is in [1, kMaxSide] a side, the focal lengths
     /// positive and everything finite.
     void validate() const {
@@ -48,6 +58,15 @@ struct CameraIntrinsics {
             throw std::invalid_argument("camera focal lengths must be positive and finite");
         if (!std::isfinite(cx) || !std::isfinite(cy))
             throw std::invalid_argument("camera principal point must be finite");
+    }
+
+  private:
+    // std::lround's value where it fits a pixel index; -1 for what lies far out or is NaN.
+    static long nearest_integer(double x) {
+        if (!(x > -1e9 && x < 1e9)) return -1;
+        const auto t = static_cast<long>(x);  // towards zero
+        const double rest = x - static_cast<double>(t);
+        return rest >= 0.5 ? t + 1 : rest <= -0.5 ? t - 1 : t;
     }
 };
 
