@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -620,15 +621,50 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
     constexpr float kContactDistance = 0.03f;
     constexpr std::size_t kMinContacts = 5;
     const CameraIntrinsics& camera = impl_->options.verification.camera;
-    const auto width = static_cast<long>(camera.width), height = static_cast<long>(camera.height);
     std::vector<RecognizedObject>& objects = scene.objects;
     // Stable names of the objects, so that a pair found wanting is not fitted again.
     std::vector<std::size_t> names(objects.size());
     for (std::size_t i = 0; i < names.size(); ++i) names[i] = i;
     std::size_t next_name = names.size();
     std::set<std::pair<std::size_t, std::size_t>> rejected;
-    // Each object's pixels in the image (the last point on a pixel owns it); only the pixels
-    // objects hold are visited and reset.
+    // Each object's pixel per point (kNoPixel where it falls outside the image), projected once:
+    // a merged object's are its parts' in its points' order. Pixels are numbered within the
+    // box that holds them all, so that only that box is cleared and visited.
+    constexpr std::uint32_t kNoPixel = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::vector<std::uint32_t>> pixels(objects.size());
+    long u0 = camera.width, v0 = camera.height, u1 = -1, v1 = -1;
+    {
+        std::vector<std::vector<std::pair<long, long>>> uv(objects.size());
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            uv[i].reserve(objects[i].cluster.points.size());
+            for (const Eigen::Vector3f& p : objects[i].cluster.points) {
+                long u = 0, v = 0;
+                if (!camera.pixel(p.x(), p.y(), p.z(), u, v)) {
+                    uv[i].emplace_back(-1, -1);
+                    continue;
+                }
+                u0 = std::min(u0, u);
+                v0 = std::min(v0, v);
+                u1 = std::max(u1, u);
+                v1 = std::max(v1, v);
+                uv[i].emplace_back(u, v);
+            }
+        }
+        if (u1 < 0) return;
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            pixels[i].reserve(uv[i].size());
+            for (const auto& [u, v] : uv[i])
+                pixels[i].push_back(u < 0 ? kNoPixel
+                                          : static_cast<std::uint32_t>((v - v0) * (u1 - u0 + 1) +
+                                                                       (u - u0)));
+        }
+    }
+    const long width = u1 - u0 + 1, height = v1 - v0 + 1;
+    // Objects made in the last round. A pair of two older ones was judged before: rejected, or
+    // short of contacts or of a fit then as now. Only pairs with a new one are looked for.
+    std::vector<bool> fresh(objects.size(), true);
+    // The owner of each pixel (the last point on a pixel owns it); only the pixels objects hold
+    // are reset.
     std::vector<int> owner(static_cast<std::size_t>(width * height), -1);
     std::vector<const Eigen::Vector3f*> seen(owner.size());
     std::vector<std::size_t> held;
@@ -636,27 +672,44 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         for (const std::size_t pixel : held) owner[pixel] = -1;
         held.clear();
         for (std::size_t i = 0; i < objects.size(); ++i)
-            for (const Eigen::Vector3f& p : objects[i].cluster.points) {
-                long u = 0, v = 0;
-                if (!camera.pixel(p.x(), p.y(), p.z(), u, v)) continue;
-                const auto pixel = static_cast<std::size_t>(v * width + u);
+            for (std::size_t k = 0; k < pixels[i].size(); ++k) {
+                const std::uint32_t pixel = pixels[i][k];
+                if (pixel == kNoPixel) continue;
                 if (owner[pixel] < 0) held.push_back(pixel);
                 owner[pixel] = static_cast<int>(i);
-                seen[pixel] = &p;
+                seen[pixel] = &objects[i].cluster.points[k];
             }
+        // Parts meet where a pixel of one, up to 6 pixels on along its row or column from a
+        // pixel of the other, is within kContactDistance of it. Each such pixel pair counts once:
+        // from the new object's pixel, or from the older one's pixel before it.
         std::map<std::pair<int, int>, std::size_t> contacts;
-        for (const std::size_t pixel : held) {
-            const int a = owner[pixel];
-            const auto u = static_cast<long>(pixel) % width, v = static_cast<long>(pixel) / width;
-            for (const long step : {1L, 2L, 4L, 6L})
-                for (const auto& [du, dv] : {std::pair{step, 0L}, std::pair{0L, step}}) {
-                    if (u + du >= width || v + dv >= height) continue;
-                    const auto other = static_cast<std::size_t>((v + dv) * width + u + du);
-                    const int b = owner[other];
-                    if (b < 0 || b == a || (*seen[pixel] - *seen[other]).norm() > kContactDistance)
-                        continue;
-                    ++contacts[{std::min(a, b), std::max(a, b)}];
-                }
+        const bool older = std::find(fresh.begin(), fresh.end(), false) != fresh.end();
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            if (!fresh[i]) continue;
+            const int a = static_cast<int>(i);
+            for (std::size_t k = 0; k < pixels[i].size(); ++k) {
+                const std::uint32_t pixel = pixels[i][k];
+                // Once a pixel: where its last point, which owns it, lies.
+                if (pixel == kNoPixel || seen[pixel] != &objects[i].cluster.points[k]) continue;
+                const auto u = static_cast<long>(pixel) % width;
+                const auto v = static_cast<long>(pixel) / width;
+                for (const long step : {1L, 2L, 4L, 6L})
+                    for (const auto& [du, dv] : {std::pair{step, 0L}, std::pair{0L, step}}) {
+                        if (u + du < width && v + dv < height) {
+                            const auto other = static_cast<std::size_t>((v + dv) * width + u + du);
+                            const int b = owner[other];
+                            if (b >= 0 && b != a &&
+                                (*seen[pixel] - *seen[other]).norm() <= kContactDistance)
+                                ++contacts[{std::min(a, b), std::max(a, b)}];
+                        }
+                        if (!older || u - du < 0 || v - dv < 0) continue;
+                        const auto other = static_cast<std::size_t>((v - dv) * width + u - du);
+                        const int b = owner[other];
+                        if (b >= 0 && !fresh[static_cast<std::size_t>(b)] &&
+                            (*seen[other] - *seen[pixel]).norm() <= kContactDistance)
+                            ++contacts[{std::min(a, b), std::max(a, b)}];
+                    }
+            }
         }
         struct Pair {
             std::size_t a = 0, b = 0;
@@ -707,6 +760,7 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         std::vector<bool> used(objects.size(), false);
         std::vector<RecognizedObject> next;
         std::vector<std::size_t> next_names;
+        std::vector<std::vector<std::uint32_t>> next_pixels;
         for (Pair& pair : pairs) {
             if (!pair.fits) {
                 rejected.insert(std::minmax(names[pair.a], names[pair.b]));
@@ -716,12 +770,17 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
             used[pair.a] = used[pair.b] = true;
             next.push_back(std::move(pair.merged));
             next_names.push_back(next_name++);
+            next_pixels.push_back(pixels[pair.a]);  // merge_clusters: a's points, then b's
+            next_pixels.back().insert(next_pixels.back().end(), pixels[pair.b].begin(),
+                                      pixels[pair.b].end());
         }
         if (next.empty()) return;
+        const std::size_t made = next.size();
         for (std::size_t i = 0; i < objects.size(); ++i)
             if (!used[i]) {
                 next.push_back(std::move(objects[i]));
                 next_names.push_back(names[i]);
+                next_pixels.push_back(std::move(pixels[i]));
             }
         // Largest first, as segmentation orders them.
         std::vector<std::size_t> order(next.size());
@@ -731,9 +790,13 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         });
         objects.clear();
         names.clear();
+        pixels.clear();
+        fresh.clear();
         for (const std::size_t i : order) {
             objects.push_back(std::move(next[i]));
             names.push_back(next_names[i]);
+            pixels.push_back(std::move(next_pixels[i]));
+            fresh.push_back(i < made);
         }
     }
 }
