@@ -66,7 +66,8 @@ struct CameraIntrinsics {
         if (!(x > -1e9 && x < 1e9)) return -1;
         const auto t = static_cast<long>(x);  // towards zero
         const double rest = x - static_cast<double>(t);
-        return rest >= 0.5 ? t + 1 : rest <= -0.5 ? t - 1 : t;
+        // Without branches: which way a pixel rounds is a coin toss, and mispredicted often.
+        return t + static_cast<long>(rest >= 0.5) - static_cast<long>(rest <= -0.5);
     }
 };
 
