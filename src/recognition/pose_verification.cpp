@@ -7,8 +7,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <bit>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -198,6 +198,8 @@ constexpr std::size_t kObjectSamples = 1000;  // object points in the k-d tree a
 constexpr double kPointWeight = 0.1;          // of the point-to-point term in ICP
 constexpr double kMinScale = 0.8;             // bounds of a free scale, relative to the model's
 constexpr double kMaxScale = 1.25;
+constexpr std::size_t kBoundEvery = 32;  // points counted between two checks of a score's bound
+constexpr double kBoundSlack = 1e-9;     // below must_beat by more than rounding could explain
 
 }  // namespace
 
@@ -287,7 +289,7 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
 
 PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& prepared, const VerificationOptions& options,
-                  bool free_scale, FitStart start) {
+                  bool free_scale, FitStart start, double must_beat) {
     validate(options);
     if (!view_pose.allFinite()) throw std::invalid_argument("verification: pose is not finite");
     const ModelSurface& surface = model.impl_->surface;
@@ -458,7 +460,17 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         const double reach = (spacing + options.inlier_distance) / scale;
         std::size_t inliers = 0;
         double squared_sum = 0.0;
-        for (const Eigen::Vector3f& q : object.points()) {
+        const std::size_t n = object.points().size();
+        for (std::size_t k = 0; k < n; ++k) {
+            // The score is at most 0.5 (inliers + 1): every point left an inlier, all the surface
+            // supported, nothing violated.
+            if (k % kBoundEvery == 0 &&
+                0.5 * (static_cast<double>(inliers + n - k) / static_cast<double>(n) + 1.0) <
+                    must_beat - kBoundSlack) {
+                out.abandoned = true;
+                return out;
+            }
+            const Eigen::Vector3f& q = object.points()[k];
             const Eigen::Vector3d local = rotation_t * (q.cast<double>() - t) / scale;
             float squared = 0.0f;
             std::size_t m = 0;
@@ -483,6 +495,23 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
     std::size_t decided = 0, violations = 0, exposed = 0, supported = 0;
     const double object_spacing = 0.01;
     for (std::size_t i = 0; i < points.size(); ++i) {
+        // At most: every sample left exposed and supported, and none a violation.
+        if (i % kBoundEvery == 0 && i > 0) {
+            const std::size_t left = points.size() - i;
+            const double support_bound =
+                exposed + left > 0
+                    ? static_cast<double>(supported + left) / static_cast<double>(exposed + left)
+                    : 0.0;
+            const double violation_bound =
+                decided + left > 0
+                    ? static_cast<double>(violations) / static_cast<double>(decided + left)
+                    : 0.0;
+            if (0.5 * (out.fit.inliers + support_bound) - violation_bound <
+                must_beat - kBoundSlack) {
+                out.abandoned = true;
+                return out;
+            }
+        }
         const Eigen::Vector3d& p = points[i];
         const int v = seen.violates(p, options.violation_margin);
         if (v >= 0) {
@@ -504,6 +533,10 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
     out.fit.support = exposed ? static_cast<double>(supported) / static_cast<double>(exposed) : 0.0;
     out.verified =
         out.fit.inliers >= options.min_inliers && out.fit.violations <= options.max_violations;
+    if (out.fit.score() < must_beat - kBoundSlack) {  // sure only at the last samples
+        out.abandoned = true;
+        out.verified = false;
+    }
     return out;
 }
 

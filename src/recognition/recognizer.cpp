@@ -499,6 +499,24 @@ void Recognizer::verify(Classification& c, const Observation& observation,
                                      prepared, o, guessed(prior->model_id), FitStart::kCameraPose));
         }
     }
+    // Candidates compete by score, less the shape term where both contrasts are known.
+    const auto shape_term = [&](int model_id) {
+        const auto model = static_cast<std::size_t>(model_id);
+        const double model_contrast = model < impl_->model_contrast.size()
+                                          ? impl_->model_contrast[model]
+                                          : std::numeric_limits<double>::quiet_NaN();
+        const double term = o.shape_weight * std::abs(model_contrast - c.shape_contrast);
+        return std::isfinite(term) ? term : 0.0;
+    };
+    const auto compared = [&](std::size_t j) {
+        if (fits[j].abandoned) return -std::numeric_limits<double>::infinity();
+        return fits[j].fit.score() - shape_term(c.neighbours[picks[j]].model_id);
+    };
+    const auto best_compared = [&] {
+        double best = -std::numeric_limits<double>::infinity();
+        for (std::size_t j = 0; j < fits.size(); ++j) best = std::max(best, compared(j));
+        return best;
+    };
     const bool prior_kept = !fits.empty() && fits.front().verified &&
                             fits.front().fit.score() >= prior->score - o.prior_tolerance;
     if (!prior_kept) {
@@ -516,21 +534,18 @@ void Recognizer::verify(Classification& c, const Observation& observation,
             if (!fits.empty() && fits.back().verified && fits.back().fit.score() >= o.accept_score)
                 break;  // good enough: the farther candidates are not fitted
             const int model = c.neighbours[i].model_id;
+            // A candidate that cannot win is dropped as soon as that is sure (where no fit ends
+            // the search early, which needs every fit whole).
+            const double must_beat = o.accept_score > 1.0
+                                         ? best_compared() + shape_term(model)
+                                         : -std::numeric_limits<double>::infinity();
             picks.push_back(i);
             fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
-                                     prepared, o, guessed(model)));
+                                     prepared, o, guessed(model), FitStart::kTrainingView,
+                                     must_beat));
         }
     }
     if (picks.empty()) return;
-    // Compared by score, less the shape term where both contrasts are known.
-    const auto compared = [&](std::size_t j) {
-        const auto model = static_cast<std::size_t>(c.neighbours[picks[j]].model_id);
-        const double model_contrast = model < impl_->model_contrast.size()
-                                          ? impl_->model_contrast[model]
-                                          : std::numeric_limits<double>::quiet_NaN();
-        const double term = o.shape_weight * std::abs(model_contrast - c.shape_contrast);
-        return fits[j].fit.score() - (std::isfinite(term) ? term : 0.0);
-    };
     std::size_t best = 0;
     for (std::size_t j = 1; j < fits.size(); ++j)
         if (compared(j) > compared(best)) best = j;
@@ -654,9 +669,9 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         for (std::size_t i = 0; i < objects.size(); ++i) {
             pixels[i].reserve(uv[i].size());
             for (const auto& [u, v] : uv[i])
-                pixels[i].push_back(u < 0 ? kNoPixel
-                                          : static_cast<std::uint32_t>((v - v0) * (u1 - u0 + 1) +
-                                                                       (u - u0)));
+                pixels[i].push_back(
+                    u < 0 ? kNoPixel
+                          : static_cast<std::uint32_t>((v - v0) * (u1 - u0 + 1) + (u - u0)));
         }
     }
     const long width = u1 - u0 + 1, height = v1 - v0 + 1;

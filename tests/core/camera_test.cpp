@@ -1,11 +1,11 @@
 // CameraIntrinsics::pixel against std::lround and hand-computed pixels.
 
+#include "esf/core/camera.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
-
-#include "esf/core/camera.hpp"
 
 namespace esf {
 namespace {

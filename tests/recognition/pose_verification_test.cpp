@@ -168,6 +168,38 @@ TEST(FitModel, TheRightShapeScoresAboveABoxOfItsSize) {
     }
 }
 
+TEST(FitModel, AHypothesisThatMustBeatAnotherStopsOnlyWhenItCannot) {
+    const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
+    const esf::Mesh box = esf::test::standing_box(0.08, 0.08, 0.12);
+    const Eigen::Isometry3d truth = standing_pose(0.0);
+    const esf::Points seen = render(can, truth);
+    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
+    view.topLeftCorner<3, 3>() = truth.linear();
+    const esf::VerificationOptions options;
+    const esf::PreparedObservation observation({seen, nullptr}, options.camera);
+    for (const esf::Mesh* mesh : {&can, &box}) {
+        const esf::PreparedModel model(esf::sample_model_surface(*mesh, 1.0, 3000, 1));
+        const esf::PoseFit whole = esf::fit_model(model, view, observation, options);
+        ASSERT_FALSE(whole.abandoned);
+        const double score = whole.fit.score();
+        // A bar it clears, or just meets from below: scored whole, the same numbers.
+        for (const double bar : {-1.0, score - 0.05, score - 1e-6}) {
+            const esf::PoseFit f = esf::fit_model(model, view, observation, options, false,
+                                                  esf::FitStart::kTrainingView, bar);
+            EXPECT_FALSE(f.abandoned) << bar;
+            EXPECT_EQ(f.fit.score(), score) << bar;
+            EXPECT_EQ(f.model_to_camera, whole.model_to_camera) << bar;
+        }
+        // A bar above what it scores: dropped, and flagged as such.
+        for (const double bar : {score + 0.05, 1.5}) {
+            const esf::PoseFit f = esf::fit_model(model, view, observation, options, false,
+                                                  esf::FitStart::kTrainingView, bar);
+            EXPECT_TRUE(f.abandoned) << bar;
+            EXPECT_FALSE(f.verified) << bar;
+        }
+    }
+}
+
 TEST(FitModel, AFrameShowsTheTableThroughAWrongHypothesis) {
     // A can on a table; a box as wide as the can puts its corners where the table is seen.
     const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 
@@ -86,6 +87,10 @@ struct PoseFit {
     double scale = 1.0;  ///< found for the model (1 when not free), in [0.8, 1.25]
     FitScore fit;
     bool verified = false;
+    /// The score could not exceed the `must_beat` it was given: scoring stopped as soon as that
+    /// was sure, so `fit` may be incomplete, and the hypothesis loses (never with the default,
+    /// which every score beats).
+    bool abandoned = false;
 };
 
 class PreparedModel;
@@ -112,8 +117,8 @@ class PreparedObservation {
 
   private:
     friend PoseFit fit_model(const PreparedModel&, const Eigen::Matrix4d&,
-                             const PreparedObservation&, const VerificationOptions&, bool,
-                             FitStart);
+                             const PreparedObservation&, const VerificationOptions&, bool, FitStart,
+                             double);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
@@ -131,8 +136,8 @@ class PreparedModel {
 
   private:
     friend PoseFit fit_model(const PreparedModel&, const Eigen::Matrix4d&,
-                             const PreparedObservation&, const VerificationOptions&, bool,
-                             FitStart);
+                             const PreparedObservation&, const VerificationOptions&, bool, FitStart,
+                             double);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
@@ -152,8 +157,12 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
 /// The same with a prepared model: what a recognizer uses for many objects. With
 /// FitStart::kCameraPose, `view_pose` is a pose in this camera (an earlier fit of the object)
 /// and its rotation is kept as it is; either way the start is centred on the object's points.
+/// A hypothesis that must beat another: once its score() is sure to end at or below
+/// `must_beat`, scoring stops and the fit comes back `abandoned` (the same answer, sooner: the
+/// score's parts are counted a point at a time, and bounded by what the rest could add).
 PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
                   const PreparedObservation& observation, const VerificationOptions& options,
-                  bool free_scale = false, FitStart start = FitStart::kTrainingView);
+                  bool free_scale = false, FitStart start = FitStart::kTrainingView,
+                  double must_beat = -std::numeric_limits<double>::infinity());
 
 }  // namespace esf
