@@ -149,13 +149,22 @@ TEST(FitModel, APreparedModelFitsAsItsSurfaceDoesAndAThinnedCloudStillSupportsIt
     EXPECT_THROW(esf::PreparedModel{esf::ModelSurface{}}, std::invalid_argument);
 }
 
+// A can seen from 45 degrees, and a box of its size: both started from the can's true rotation.
+struct CanAndBox {
+    esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
+    esf::Mesh box = esf::test::standing_box(0.08, 0.08, 0.12);
+    esf::Points seen = render(can, standing_pose(0.0));
+    Eigen::Matrix4d view = start(standing_pose(0.0));
+
+    static Eigen::Matrix4d start(const Eigen::Isometry3d& truth) {
+        Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+        m.topLeftCorner<3, 3>() = truth.linear();
+        return m;
+    }
+};
+
 TEST(FitModel, TheRightShapeScoresAboveABoxOfItsSize) {
-    const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
-    const esf::Mesh box = esf::test::standing_box(0.08, 0.08, 0.12);
-    const Eigen::Isometry3d truth = standing_pose(0.0);
-    const esf::Points seen = render(can, truth);
-    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
-    view.topLeftCorner<3, 3>() = truth.linear();
+    const auto [can, box, seen, view] = CanAndBox{};
     for (const bool free_scale : {false, true}) {
         const esf::PoseFit as_can = esf::fit_model(esf::sample_model_surface(can, 1.0, 3000, 1),
                                                    view, {seen, nullptr}, {}, free_scale);
@@ -169,12 +178,7 @@ TEST(FitModel, TheRightShapeScoresAboveABoxOfItsSize) {
 }
 
 TEST(FitModel, AHypothesisThatMustBeatAnotherStopsOnlyWhenItCannot) {
-    const esf::Mesh can = esf::test::standing_cylinder(0.04, 0.12, 64);
-    const esf::Mesh box = esf::test::standing_box(0.08, 0.08, 0.12);
-    const Eigen::Isometry3d truth = standing_pose(0.0);
-    const esf::Points seen = render(can, truth);
-    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
-    view.topLeftCorner<3, 3>() = truth.linear();
+    const auto [can, box, seen, view] = CanAndBox{};
     const esf::VerificationOptions options;
     const esf::PreparedObservation observation({seen, nullptr}, options.camera);
     for (const esf::Mesh* mesh : {&can, &box}) {
