@@ -443,7 +443,12 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             break;
     }
 
-    // Score under the final pose.
+    // Score under the final pose. A hypothesis cannot win once the score of the bounds of its
+    // parts (at most its inliers and support, at least its violations) falls short of must_beat.
+    const auto cannot_win = [&](double inliers, double support, double violations) {
+        const FitScore bound{.inliers = inliers, .violations = violations, .support = support};
+        return bound.score() < must_beat - kBoundSlack;
+    };
     PoseFit out;
     out.model_to_camera = pose;
     out.scale = scale;
@@ -462,11 +467,10 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         double squared_sum = 0.0;
         const std::size_t n = object.points().size();
         for (std::size_t k = 0; k < n; ++k) {
-            // The score is at most 0.5 (inliers + 1): every point left an inlier, all the surface
-            // supported, nothing violated.
+            // At most: every point left an inlier, all the surface supported, nothing violated.
             if (k % kBoundEvery == 0 &&
-                0.5 * (static_cast<double>(inliers + n - k) / static_cast<double>(n) + 1.0) <
-                    must_beat - kBoundSlack) {
+                cannot_win(static_cast<double>(inliers + n - k) / static_cast<double>(n), 1.0,
+                           0.0)) {
                 out.abandoned = true;
                 return out;
             }
@@ -506,8 +510,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
                 decided + left > 0
                     ? static_cast<double>(violations) / static_cast<double>(decided + left)
                     : 0.0;
-            if (0.5 * (out.fit.inliers + support_bound) - violation_bound <
-                must_beat - kBoundSlack) {
+            if (cannot_win(out.fit.inliers, support_bound, violation_bound)) {
                 out.abandoned = true;
                 return out;
             }
@@ -533,7 +536,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
     out.fit.support = exposed ? static_cast<double>(supported) / static_cast<double>(exposed) : 0.0;
     out.verified =
         out.fit.inliers >= options.min_inliers && out.fit.violations <= options.max_violations;
-    if (out.fit.score() < must_beat - kBoundSlack) {  // sure only at the last samples
+    if (cannot_win(out.fit.inliers, out.fit.support, out.fit.violations)) {  // sure only now
         out.abandoned = true;
         out.verified = false;
     }

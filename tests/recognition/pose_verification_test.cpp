@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -249,27 +250,21 @@ TEST(FitModel, RejectsBadInput) {
     bad.iterations = 0;
     EXPECT_THROW(esf::fit_model(surface, Eigen::Matrix4d::Identity(), {some, nullptr}, bad),
                  std::invalid_argument);
-    bad = {};
-    bad.accept_score = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.accept_score = 3.0;
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.accept_score = 2.0;
-    EXPECT_NO_THROW(esf::validate(bad));
-    bad.prior_tolerance = -0.1;
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.prior_tolerance = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.prior_tolerance = 0.0;
-    EXPECT_NO_THROW(esf::validate(bad));
-    bad.shape_weight = -0.1;
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.shape_weight = std::numeric_limits<double>::quiet_NaN();
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.shape_weight = 2.5;
-    EXPECT_THROW(esf::validate(bad), std::invalid_argument);
-    bad.shape_weight = 0.0;
-    EXPECT_NO_THROW(esf::validate(bad));
+    // Each option refused at the values out of its range, accepted at one in it.
+    const double not_a_number = std::numeric_limits<double>::quiet_NaN();
+    const auto check_range = [](double esf::VerificationOptions::*option,
+                                std::initializer_list<double> refused, double accepted) {
+        esf::VerificationOptions o;
+        for (const double value : refused) {
+            o.*option = value;
+            EXPECT_THROW(esf::validate(o), std::invalid_argument) << value;
+        }
+        o.*option = accepted;
+        EXPECT_NO_THROW(esf::validate(o)) << accepted;
+    };
+    check_range(&esf::VerificationOptions::accept_score, {not_a_number, 3.0}, 2.0);
+    check_range(&esf::VerificationOptions::prior_tolerance, {-0.1, not_a_number}, 0.0);
+    check_range(&esf::VerificationOptions::shape_weight, {-0.1, not_a_number, 2.5}, 0.0);
 }
 
 }  // namespace
