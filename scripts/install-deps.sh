@@ -7,7 +7,7 @@ set -euo pipefail
 packages=(
     build-essential cmake pkg-config clang-format
     libeigen3-dev libpcl-dev libflann-dev libassimp-dev libembree-dev libtbb-dev
-    libcli11-dev libsqlite3-dev libpng-dev libfmt-dev nlohmann-json3-dev libnanoflann-dev
+    libcli11-dev libsqlite3-dev libpng-dev libfmt-dev nlohmann-json3-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     libfreenect-dev libfreenect-bin
     python3-dev pybind11-dev python3-numpy python3-pytest python3-venv

@@ -13,98 +13,20 @@
 #include <cstdlib>
 #include <limits>
 #include <memory>
-#include <nanoflann.hpp>
 #include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "recognition/nearest_points.hpp"
+
 namespace esf {
+
+using detail::NearestPoints;
 
 namespace {
 
 constexpr std::size_t kNoMatch = std::numeric_limits<std::size_t>::max();  // no point (hint)
-
-// nanoflann's view of a point list.
-struct PointsAdaptor {
-    const Points* points;
-    std::size_t kdtree_get_point_count() const { return points->size(); }
-    float kdtree_get_pt(std::size_t i, std::size_t dim) const {
-        return (*points)[i][static_cast<Eigen::Index>(dim)];
-    }
-    template <class Box>
-    bool kdtree_get_bbox(Box&) const {
-        return false;
-    }
-};
-
-using KdTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
-                                        PointsAdaptor, 3, std::size_t>;
-
-class NearestPoints {
-  public:
-    explicit NearestPoints(Points points)
-        : points_(std::move(points)),
-          adaptor_{&points_},
-          tree_(3, adaptor_, nanoflann::KDTreeSingleIndexAdaptorParams(10)) {
-        tree_.buildIndex();
-    }
-    // Index of the nearest point within sqrt(`radius_squared`), and the squared distance; false
-    // when there is none. The bound prunes the search: cheaper than the nearest point and a
-    // test after. A `hint` (a point likely to be near, such as the last ICP iteration's match)
-    // within the radius bounds it further: the search then looks only for strictly nearer
-    // points (the same answer but among points at exactly the same distance).
-    bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t hint,
-                        std::size_t& index, float& squared) const {
-        // The next float up, so that a point at exactly the radius counts (std::nextafter for a
-        // positive finite bound, without the call).
-        NearestWithin result(
-            std::bit_cast<float>(std::bit_cast<std::uint32_t>(radius_squared) + 1u));
-        if (hint < points_.size()) {
-            const Eigen::Vector3f& h = points_[hint];
-            const float dx = q.x() - h.x(), dy = q.y() - h.y(), dz = q.z() - h.z();
-            float d = dx * dx;  // summed as nanoflann's L2 sums
-            d += dy * dy;
-            d += dz * dz;
-            if (d < result.best) {
-                result.best = d;
-                result.index = hint;
-                result.found = true;
-            }
-        }
-        tree_.findNeighbors(result, q.data(), nanoflann::SearchParams());
-        if (!result.found) return false;
-        index = result.index;
-        squared = result.best;
-        return true;
-    }
-    const Points& points() const { return points_; }
-
-  private:
-    // nanoflann's result set for one neighbour, starting from a bound instead of infinity.
-    struct NearestWithin {
-        explicit NearestWithin(float bound) : best(bound) {}
-        float best;
-        std::size_t index = 0;
-        bool found = false;
-        std::size_t size() const { return found ? 1 : 0; }
-        bool full() const { return true; }
-        bool addPoint(float distance, std::size_t i) {
-            if (distance < best) {
-                best = distance;
-                index = i;
-                found = true;
-            }
-            return true;
-        }
-        float worstDist() const { return best; }
-    };
-
-    Points points_;
-    PointsAdaptor adaptor_;
-    KdTree tree_;
-};
 
 // At most `limit` of `points`, evenly strided (deterministic).
 Points stride_sample(std::span<const Eigen::Vector3f> points, std::size_t limit) {
@@ -194,12 +116,18 @@ class SeenSpace {
 };
 
 constexpr std::size_t kIcpSamples = 200;      // visible surface samples per ICP iteration
-constexpr std::size_t kObjectSamples = 1000;  // object points in the k-d tree and the score
+constexpr std::size_t kObjectSamples = 1000;  // object points in the search grid and the score
 constexpr double kPointWeight = 0.1;          // of the point-to-point term in ICP
 constexpr double kMinScale = 0.8;             // bounds of a free scale, relative to the model's
 constexpr double kMaxScale = 1.25;
 constexpr std::size_t kBoundEvery = 32;  // points counted between two checks of a score's bound
 constexpr double kBoundSlack = 1e-9;     // below must_beat by more than rounding could explain
+constexpr float kObjectCell = 0.01f;     // grid cell of the object's points (m)
+
+// The radius of the patch a model's surface sample stands for.
+double patch_radius(const ModelSurface& surface) {
+    return surface.diameter / std::sqrt(static_cast<double>(surface.points.size())) * 1.5;
+}
 
 }  // namespace
 
@@ -227,7 +155,8 @@ void validate(const VerificationOptions& o) {
 
 struct PreparedObservation::Impl {
     Impl(const Observation& observation, const CameraIntrinsics& camera)
-        : object(stride_sample(observation.points, kObjectSamples)), seen(observation, camera) {
+        : object(stride_sample(observation.points, kObjectSamples), kObjectCell),
+          seen(observation, camera) {
         for (const Eigen::Vector3f& p : object.points()) centroid += p.cast<double>();
         centroid /= static_cast<double>(object.points().size());
     }
@@ -266,7 +195,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
 }
 
 struct PreparedModel::Impl {
-    explicit Impl(ModelSurface s) : surface(std::move(s)), tree(surface.points) {}
+    explicit Impl(ModelSurface s)
+        : surface(std::move(s)), tree(surface.points, static_cast<float>(patch_radius(surface))) {}
     ModelSurface surface;
     NearestPoints tree;  // the surface's points, model frame
 };
@@ -342,7 +272,7 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             }
         };
 
-    // The object point nearest to a model point, within `radius` (the k-d tree). ICP pairs
+    // The object point nearest to a model point, within `radius` (the search grid). ICP pairs
     // points so: projective association (a point with the object points seen at its pixel) cost
     // accuracy on the real views and the pose benchmark (BENCHMARKS.md).
     // Each surface sample's match of the last iteration starts its next search (the same
@@ -454,15 +384,12 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
     out.scale = scale;
     visible_samples(pose, 1, points, normals, indices);
     {
-        // The object's points taken into the model's frame, where its k-d tree was built once:
+        // The object's points taken into the model's frame, where its grid was built once:
         // the pose is scale times a rotation, so distances shrink by the scale there.
         const Eigen::Matrix3d rotation_t = pose.topLeftCorner<3, 3>().transpose() / scale;
         const Eigen::Vector3d t = pose.topRightCorner<3, 1>();
         const NearestPoints& tree = model.impl_->tree;
-        // A sample stands for a patch of about this radius.
-        const double spacing =
-            surface.diameter / std::sqrt(static_cast<double>(surface.points.size())) * 1.5;
-        const double reach = (spacing + options.inlier_distance) / scale;
+        const double reach = (patch_radius(surface) + options.inlier_distance) / scale;
         std::size_t inliers = 0;
         double squared_sum = 0.0;
         const std::size_t n = object.points().size();
@@ -524,8 +451,8 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         if (seen.hidden(p, options.violation_margin)) continue;
         ++exposed;
         // Looked up by pixel among the object's points, the support came out lower at the rim
-        // of the object than by the k-d tree of its samples, and the proving ground lost
-        // (BENCHMARKS.md): the k-d tree stays.
+        // of the object than by the nearest of its samples, and the proving ground lost
+        // (BENCHMARKS.md): the nearest sample stays.
         Eigen::Vector3d q;
         if (pair(p, indices[i], q, object_spacing + options.inlier_distance) &&
             std::abs((q - p).dot(normals[i])) < options.inlier_distance)

@@ -4,10 +4,10 @@
 //   start   the matched training view's rotation, turned towards the object's direction from the
 //           camera, the model's visible surface centred on the object's points
 //   align   point-to-plane ICP (the model's normals) of the model's camera-facing surface samples
-//           to their nearest object points (a k-d tree, nanoflann), correspondences within a
-//           radius shrinking from 3 to 1 cm
+//           to their nearest object points (a grid of cells, recognition/nearest_points.hpp),
+//           correspondences within a radius shrinking from 3 to 1 cm
 //   score   inliers: share of the object's points within `inlier_distance` of the posed surface
-//           (the model's k-d tree, built once per model: PreparedModel);
+//           (the model's grid, built once per model: PreparedModel);
 //           support: share of the posed model's visible surface (not hidden by nearer returns)
 //           with object points on it;
 //           violations: share of the posed visible surface where the sensor sees free space:
@@ -104,7 +104,7 @@ enum class FitStart {
     kCameraPose,
 };
 
-/// An observation made ready for several hypotheses: its k-d tree and what the sensor saw
+/// An observation made ready for several hypotheses: its search grid and what the sensor saw
 /// (the frame, or the object's outline) are built once. The observation's points and frame
 /// must outlive it. Throws std::invalid_argument for fewer than 3 points or a frame that is not
 /// an organised cloud of the camera's size.
@@ -123,7 +123,7 @@ class PreparedObservation {
     std::unique_ptr<Impl> impl_;
 };
 
-/// A model's surface made ready for several hypotheses: its k-d tree (model frame) is built
+/// A model's surface made ready for several hypotheses: its search grid (model frame) is built
 /// once. Throws std::invalid_argument for a surface check_model_surface() refuses (empty, normals
 /// that do not match its points, values that are not finite).
 class PreparedModel {

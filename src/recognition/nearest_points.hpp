@@ -1,0 +1,46 @@
+#pragma once
+// The nearest of a fixed set of points to a query, within a radius (internal to verification).
+// A uniform grid of cubic cells, its points sorted by cell, as KISS-ICP's voxel map: the radii
+// of verification are a few cell sizes or less, so a query reads a handful of cells where a
+// k-d tree descends and backtracks (BENCHMARKS.md, "Nearest points by a grid").
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "esf/core/point_cloud.hpp"
+
+namespace esf::detail {
+
+class NearestPoints {
+  public:
+    /// Cells of `cell` metres (> 0, finite), made larger where the points' box would otherwise
+    /// need more than about 8 cells a point. Points that are not finite are never found.
+    NearestPoints(Points points, float cell);
+
+    /// The index of the point nearest to `q` with a squared distance of at most
+    /// `radius_squared`, and that squared distance (float, summed x, y, z in that order);
+    /// false when there is none. A `hint` (an index, or anything out of range for none) is
+    /// tried first; a point found later replaces it only when strictly nearer. Among points at
+    /// exactly the same distance the first tried wins.
+    bool nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t hint,
+                        std::size_t& index, float& squared) const;
+
+    const Points& points() const { return points_; }
+
+  private:
+    struct Entry {
+        float x, y, z;
+        std::uint32_t index;
+    };
+
+    Points points_;
+    std::vector<Entry> sorted_;             // finite points, by cell
+    std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into sorted_
+    Eigen::Vector3f origin_ = Eigen::Vector3f::Zero();
+    float inverse_cell_ = 1.0f;
+    int cells_[3] = {0, 0, 0};  // x, y, z
+};
+
+}  // namespace esf::detail
