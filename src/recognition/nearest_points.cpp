@@ -77,9 +77,10 @@ NearestPoints::NearestPoints(Points points, float cell) : points_(std::move(poin
             const double at = (static_cast<double>(p[a]) - origin_[a]) * inverse_cell_;
             c[a] = static_cast<std::size_t>(std::clamp(at, 0.0, cells_[a] - 1.0));
         }
-        cell_of[i] = static_cast<std::uint32_t>(
-            (c[2] * static_cast<std::size_t>(cells_[1]) + c[1]) * static_cast<std::size_t>(cells_[0]) +
-            c[0]);
+        cell_of[i] =
+            static_cast<std::uint32_t>((c[2] * static_cast<std::size_t>(cells_[1]) + c[1]) *
+                                           static_cast<std::size_t>(cells_[0]) +
+                                       c[0]);
         ++cell_start_[cell_of[i] + 1];
     }
     for (std::size_t c = 0; c < count; ++c) cell_start_[c + 1] += cell_start_[c];
@@ -92,8 +93,8 @@ NearestPoints::NearestPoints(Points points, float cell) : points_(std::move(poin
     }
 }
 
-bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_squared,
-                                   std::size_t hint, std::size_t& index, float& squared) const {
+bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_squared, std::size_t hint,
+                                   std::size_t& index, float& squared) const {
     // The next float up, so that a point at exactly the radius counts (std::nextafter for a
     // positive finite bound, without the call).
     float best = radius_squared < std::numeric_limits<float>::infinity()
@@ -132,7 +133,8 @@ bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_square
                 own[a] = inside ? static_cast<long>(at) : 0;
             }
             if (inside) {
-                const std::size_t cell = static_cast<std::size_t>((own[2] * cells_[1] + own[1]) * cells_[0] + own[0]);
+                const std::size_t cell =
+                    static_cast<std::size_t>((own[2] * cells_[1] + own[1]) * cells_[0] + own[0]);
                 scan(cell_start_[cell], cell_start_[cell + 1]);
             }
         }

@@ -36,7 +36,7 @@ class NearestPoints {
     };
 
     Points points_;
-    std::vector<Entry> sorted_;             // finite points, by cell
+    std::vector<Entry> sorted_;              // finite points, by cell
     std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into sorted_
     Eigen::Vector3f origin_ = Eigen::Vector3f::Zero();
     float inverse_cell_ = 1.0f;

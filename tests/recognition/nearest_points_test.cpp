@@ -88,7 +88,8 @@ TEST(NearestPoints, MatchesBruteForceOnACloud) {
     // The queries about the same box: shift them onto it.
     Points shifted = points;
     for (Eigen::Vector3f& p : shifted) p.z() -= 0.85f;
-    for (const float cell : {0.002f, 0.01f, 0.03f, 1.0f}) expect_brute_force(shifted, cell, 11, 0.15f);
+    for (const float cell : {0.002f, 0.01f, 0.03f, 1.0f})
+        expect_brute_force(shifted, cell, 11, 0.15f);
 }
 
 TEST(NearestPoints, MatchesBruteForceOnASurface) {
