@@ -64,20 +64,39 @@ class SeenSpace {
         height_ = static_cast<std::size_t>(camera.height);
         frame_ = o.frame;
         if (frame_ != nullptr) return;
-        // The outline: pixels the object's points fall on, grown by kSlack pixels.
-        outline_.assign(width_ * height_, 0);
+        // The outline: pixels the object's points fall on, grown by kSlack pixels. Kept as the
+        // running sums of the points per pixel (a summed-area table) over the box of the image
+        // the outline lies in, so that a pixel's square of slack is four reads.
+        std::vector<std::size_t> hits;
+        hits.reserve(o.points.size());
+        long u_min = std::numeric_limits<long>::max(), v_min = u_min, u_max = -1, v_max = -1;
         for (const Eigen::Vector3f& p : o.points) {
             long u = 0, v = 0;
             if (!project(p.cast<double>(), u, v)) continue;
-            for (long dv = -kSlack; dv <= kSlack; ++dv)
-                for (long du = -kSlack; du <= kSlack; ++du) {
-                    const long uu = u + du, vv = v + dv;
-                    if (uu >= 0 && vv >= 0 && uu < static_cast<long>(width_) &&
-                        vv < static_cast<long>(height_))
-                        outline_[static_cast<std::size_t>(vv) * width_ +
-                                 static_cast<std::size_t>(uu)] = 1;
-                }
+            u_min = std::min(u_min, u);
+            u_max = std::max(u_max, u);
+            v_min = std::min(v_min, v);
+            v_max = std::max(v_max, v);
+            hits.push_back(static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u));
         }
+        if (hits.empty()) return;
+        box_u_ = std::max(0L, u_min - kSlack);
+        box_v_ = std::max(0L, v_min - kSlack);
+        box_width_ = std::min(static_cast<long>(width_) - 1, u_max + kSlack) - box_u_ + 1;
+        box_height_ = std::min(static_cast<long>(height_) - 1, v_max + kSlack) - box_v_ + 1;
+        // sums_[(v + 1) * (box_width_ + 1) + u + 1]: the points on the box's pixels [0, u] x [0, v].
+        const std::size_t stride = static_cast<std::size_t>(box_width_) + 1;
+        sums_.assign(stride * (static_cast<std::size_t>(box_height_) + 1), 0);
+        for (const std::size_t pixel : hits) {
+            const std::size_t u = pixel % width_ - static_cast<std::size_t>(box_u_);
+            const std::size_t v = pixel / width_ - static_cast<std::size_t>(box_v_);
+            ++sums_[(v + 1) * stride + u + 1];
+        }
+        for (std::size_t v = 1; v <= static_cast<std::size_t>(box_height_); ++v)
+            for (std::size_t u = 1; u < stride; ++u)
+                sums_[v * stride + u] +=
+                    sums_[v * stride + u - 1] + sums_[(v - 1) * stride + u] -
+                    sums_[(v - 1) * stride + u - 1];
     }
 
     // Whether something nearer than the point (by `margin`) hides it in the frame.
@@ -94,16 +113,27 @@ class SeenSpace {
     int violates(const Eigen::Vector3d& p, double margin) const {
         long u = 0, v = 0;
         if (!project(p, u, v)) return -1;
-        const std::size_t pixel =
-            static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u);
-        if (frame_ == nullptr) return outline_[pixel] ? 0 : 1;
-        const Eigen::Vector3f& seen = frame_->points[pixel];
+        if (frame_ == nullptr) return on_outline(u - box_u_, v - box_v_) ? 0 : 1;
+        const Eigen::Vector3f& seen =
+            frame_->points[static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u)];
         if (!std::isfinite(seen.z())) return -1;
         return static_cast<double>(seen.z()) > p.z() + margin ? 1 : 0;
     }
 
   private:
     static constexpr long kSlack = 2;
+
+    // Whether a point falls within kSlack pixels of the box's pixel (u, v). The box holds
+    // every such pixel, so a pixel outside it has none.
+    bool on_outline(long u, long v) const {
+        if (u < 0 || v < 0 || u >= box_width_ || v >= box_height_) return false;
+        const auto at = [&](long x, long y) {  // the sum over [0, x) x [0, y)
+            return sums_[static_cast<std::size_t>(y * (box_width_ + 1) + x)];
+        };
+        const long u0 = std::max(0L, u - kSlack), u1 = std::min(box_width_, u + kSlack + 1);
+        const long v0 = std::max(0L, v - kSlack), v1 = std::min(box_height_, v + kSlack + 1);
+        return at(u1, v1) - at(u0, v1) - at(u1, v0) + at(u0, v0) > 0;
+    }
 
     bool project(const Eigen::Vector3d& p, long& u, long& v) const {
         return p.z() > 1e-6 && camera_.pixel(p.x(), p.y(), p.z(), u, v);
@@ -112,7 +142,8 @@ class SeenSpace {
     CameraIntrinsics camera_;
     std::size_t width_ = 0, height_ = 0;
     const PointCloud* frame_ = nullptr;
-    std::vector<unsigned char> outline_;
+    long box_u_ = 0, box_v_ = 0, box_width_ = 0, box_height_ = 0;  // the outline's box
+    std::vector<std::uint32_t> sums_;  // points per pixel of the box, summed (on_outline)
 };
 
 constexpr std::size_t kIcpSamples = 200;      // visible surface samples per ICP iteration
