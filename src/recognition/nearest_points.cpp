@@ -2,6 +2,8 @@
 
 #include "recognition/nearest_points.hpp"
 
+#include <emmintrin.h>  // SSE2, part of every x86-64 CPU
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -84,12 +86,17 @@ NearestPoints::NearestPoints(Points points, float cell) : points_(std::move(poin
         ++cell_start_[cell_of[i] + 1];
     }
     for (std::size_t c = 0; c < count; ++c) cell_start_[c + 1] += cell_start_[c];
-    sorted_.resize(finite);
+    for (std::vector<float>* axis : {&xs_, &ys_, &zs_}) axis->assign(finite + kPadding, 0.0f);
+    sorted_index_.resize(finite);
     std::vector<std::uint32_t> next(cell_start_.begin(), cell_start_.end() - 1);
     for (std::size_t i = 0; i < points_.size(); ++i) {
         const Eigen::Vector3f& p = points_[i];
         if (!p.allFinite()) continue;
-        sorted_[next[cell_of[i]]++] = Entry{p.x(), p.y(), p.z(), static_cast<std::uint32_t>(i)};
+        const std::uint32_t at = next[cell_of[i]]++;
+        xs_[at] = p.x();
+        ys_[at] = p.y();
+        zs_[at] = p.z();
+        sorted_index_[at] = static_cast<std::uint32_t>(i);
     }
 }
 
@@ -112,17 +119,32 @@ bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_square
             found = true;
         }
     }
-    const auto scan = [&](std::size_t from, std::size_t to) {  // sorted_[from, to)
-        for (const Entry* e = sorted_.data() + from; e != sorted_.data() + to; ++e) {
-            const float d = squared_distance(qx, qy, qz, e->x, e->y, e->z);
-            if (d < best) {
-                best = d;
-                best_index = e->index;
-                found = true;
-            }
+    // The sorted points [from, to), four at a time: each lane's distance is summed as
+    // squared_distance sums it, and lanes nearer than the best so far are taken in order, so
+    // that the result is the one a point-by-point loop gives.
+    const __m128 qx4 = _mm_set1_ps(qx), qy4 = _mm_set1_ps(qy), qz4 = _mm_set1_ps(qz);
+    const auto scan = [&](std::size_t from, std::size_t to) {
+        for (std::size_t i = from; i < to; i += 4) {
+            const __m128 dx = _mm_sub_ps(qx4, _mm_loadu_ps(xs_.data() + i));
+            const __m128 dy = _mm_sub_ps(qy4, _mm_loadu_ps(ys_.data() + i));
+            const __m128 dz = _mm_sub_ps(qz4, _mm_loadu_ps(zs_.data() + i));
+            __m128 d = _mm_mul_ps(dx, dx);
+            d = _mm_add_ps(d, _mm_mul_ps(dy, dy));
+            d = _mm_add_ps(d, _mm_mul_ps(dz, dz));
+            int nearer = _mm_movemask_ps(_mm_cmplt_ps(d, _mm_set1_ps(best)));
+            if (to - i < 4) nearer &= (1 << (to - i)) - 1;
+            if (nearer == 0) continue;
+            alignas(16) float lanes[4];
+            _mm_store_ps(lanes, d);
+            for (int lane = 0; lane < 4; ++lane)
+                if ((nearer >> lane & 1) && lanes[lane] < best) {
+                    best = lanes[lane];
+                    best_index = sorted_index_[i + static_cast<std::size_t>(lane)];
+                    found = true;
+                }
         }
     };
-    if (!sorted_.empty() && q.allFinite() && best > 0.0f) {
+    if (!sorted_index_.empty() && q.allFinite() && best > 0.0f) {
         // The query's own cell first: a near point there narrows the cells read after.
         {
             long own[3];

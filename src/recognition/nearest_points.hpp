@@ -30,14 +30,13 @@ class NearestPoints {
     const Points& points() const { return points_; }
 
   private:
-    struct Entry {
-        float x, y, z;
-        std::uint32_t index;
-    };
-
     Points points_;
-    std::vector<Entry> sorted_;              // finite points, by cell
-    std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into sorted_
+    // The finite points sorted by cell, coordinate by coordinate (each padded by kPadding
+    // zeros, so that a block of four may be read past the last point), and their indices.
+    static constexpr std::size_t kPadding = 3;
+    std::vector<float> xs_, ys_, zs_;
+    std::vector<std::uint32_t> sorted_index_;
+    std::vector<std::uint32_t> cell_start_;  // cells + 1 offsets into the sorted points
     Eigen::Vector3f origin_ = Eigen::Vector3f::Zero();
     float inverse_cell_ = 1.0f;
     int cells_[3] = {0, 0, 0};  // x, y, z

@@ -84,7 +84,8 @@ class SeenSpace {
         box_v_ = std::max(0L, v_min - kSlack);
         box_width_ = std::min(static_cast<long>(width_) - 1, u_max + kSlack) - box_u_ + 1;
         box_height_ = std::min(static_cast<long>(height_) - 1, v_max + kSlack) - box_v_ + 1;
-        // sums_[(v + 1) * (box_width_ + 1) + u + 1]: the points on the box's pixels [0, u] x [0, v].
+        // sums_[(v + 1) * (box_width_ + 1) + u + 1]: the points on the box's pixels [0, u] x [0,
+        // v].
         const std::size_t stride = static_cast<std::size_t>(box_width_) + 1;
         sums_.assign(stride * (static_cast<std::size_t>(box_height_) + 1), 0);
         for (const std::size_t pixel : hits) {
@@ -94,9 +95,8 @@ class SeenSpace {
         }
         for (std::size_t v = 1; v <= static_cast<std::size_t>(box_height_); ++v)
             for (std::size_t u = 1; u < stride; ++u)
-                sums_[v * stride + u] +=
-                    sums_[v * stride + u - 1] + sums_[(v - 1) * stride + u] -
-                    sums_[(v - 1) * stride + u - 1];
+                sums_[v * stride + u] += sums_[v * stride + u - 1] + sums_[(v - 1) * stride + u] -
+                                         sums_[(v - 1) * stride + u - 1];
     }
 
     // Whether something nearer than the point (by `margin`) hides it in the frame.
@@ -153,7 +153,8 @@ constexpr double kMinScale = 0.8;             // bounds of a free scale, relativ
 constexpr double kMaxScale = 1.25;
 constexpr std::size_t kBoundEvery = 32;  // points counted between two checks of a score's bound
 constexpr double kBoundSlack = 1e-9;     // below must_beat by more than rounding could explain
-constexpr float kObjectCell = 0.01f;     // grid cell of the object's points (m)
+constexpr float kObjectCell = 0.02f;     // grid cell of the object's points (m)
+constexpr double kModelCell = 2.0;       // grid cell of a model's surface, in patch radii
 
 // The radius of the patch a model's surface sample stands for.
 double patch_radius(const ModelSurface& surface) {
@@ -227,7 +228,8 @@ PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
 
 struct PreparedModel::Impl {
     explicit Impl(ModelSurface s)
-        : surface(std::move(s)), tree(surface.points, static_cast<float>(patch_radius(surface))) {}
+        : surface(std::move(s)),
+          tree(surface.points, static_cast<float>(kModelCell * patch_radius(surface))) {}
     ModelSurface surface;
     NearestPoints tree;  // the surface's points, model frame
 };
