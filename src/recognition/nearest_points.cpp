@@ -17,7 +17,7 @@ namespace {
 
 // Cells a grid may have: at least this many, and at most kCellsPerPoint a point beyond.
 constexpr double kMinCells = 4096.0;
-constexpr double kCellsPerPoint = 32.0;
+constexpr double kCellsPerPoint = 8.0;
 // The query's reach is widened by this share so that no point a float distance would accept
 // lies outside the cells read (the distance's rounding is far smaller).
 constexpr double kReachSlack = 1e-6;

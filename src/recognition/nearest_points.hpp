@@ -16,7 +16,8 @@ namespace esf::detail {
 class NearestPoints {
   public:
     /// Cells of `cell` metres (> 0, finite), made larger where the points' box would otherwise
-    /// need more than about 8 cells a point. Points that are not finite are never found.
+    /// need more than 8 cells a point (4,096 for a few points): memory stays of the order of the
+    /// points'. Points that are not finite are never found.
     NearestPoints(Points points, float cell);
 
     /// The index of the point nearest to `q` with a squared distance of at most
