@@ -22,7 +22,7 @@ constexpr double kCellsPerPoint = 8.0;
 // lies outside the cells read (the distance's rounding is far smaller).
 constexpr double kReachSlack = 1e-6;
 
-// The squared distance as a k-d tree over floats sums it: x, then y, then z.
+// The squared distance in float, summed x, then y, then z (as the four lanes of a scan sum it).
 inline float squared_distance(float qx, float qy, float qz, float px, float py, float pz) {
     const float dx = qx - px, dy = qy - py, dz = qz - pz;
     float d = dx * dx;
