@@ -143,7 +143,7 @@ struct Recognizer::Impl {
     std::size_t primitive_offset = 0, primitive_size = 0;
     std::vector<double> model_contrast;
     std::vector<ModelInfo> models;  // by model id (DescriptorMatrix::models)
-    // Verification: each model's surface (stored, or sampled from its mesh) and its k-d tree,
+    // Verification: each model's surface (stored, or sampled from its mesh) and its search grid,
     // loaded on first use; `stored` reads the database's surfaces (under surfaces_mutex).
     bool verifies = false;
     std::uint64_t training_seed = 0;  // the models' surface seeds derive from it, as in training
