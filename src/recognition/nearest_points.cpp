@@ -145,29 +145,26 @@ bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_square
         }
     };
     if (!sorted_index_.empty() && q.allFinite() && best > 0.0f) {
+        // The query in cell units: a point of cell k has k <= coordinate < k + 1.
+        double at[3];
+        for (int a = 0; a < 3; ++a)
+            at[a] = (static_cast<double>(q[a]) - origin_[a]) * static_cast<double>(inverse_cell_);
         // The query's own cell first: a near point there narrows the cells read after.
-        {
-            long own[3];
-            bool inside = true;
-            for (int a = 0; a < 3; ++a) {
-                const double at = (static_cast<double>(q[a]) - origin_[a]) * inverse_cell_;
-                inside = inside && at >= 0.0 && at < cells_[a];
-                own[a] = inside ? static_cast<long>(at) : 0;
-            }
-            if (inside) {
-                const std::size_t cell =
-                    static_cast<std::size_t>((own[2] * cells_[1] + own[1]) * cells_[0] + own[0]);
-                scan(cell_start_[cell], cell_start_[cell + 1]);
-            }
+        if (at[0] >= 0.0 && at[1] >= 0.0 && at[2] >= 0.0 && at[0] < cells_[0] &&
+            at[1] < cells_[1] && at[2] < cells_[2]) {
+            const auto own = [&](int a) { return static_cast<long>(at[a]); };  // the floor here
+            const auto cell =
+                static_cast<std::size_t>((own(2) * cells_[1] + own(1)) * cells_[0] + own(0));
+            scan(cell_start_[cell], cell_start_[cell + 1]);
         }
         // Then every row of cells within the reach left (the own cell's points are read again,
         // and cannot be strictly nearer the second time).
-        const double reach = std::sqrt(static_cast<double>(best)) * (1.0 + kReachSlack);
+        const double reach = std::sqrt(static_cast<double>(best)) * (1.0 + kReachSlack) *
+                             static_cast<double>(inverse_cell_);
         long first[3], last[3];
         bool misses = false;  // the reach misses the grid on some axis
         for (int a = 0; a < 3; ++a) {
-            const double from = (static_cast<double>(q[a]) - reach - origin_[a]) * inverse_cell_;
-            const double to = (static_cast<double>(q[a]) + reach - origin_[a]) * inverse_cell_;
+            const double from = at[a] - reach, to = at[a] + reach;
             misses = to < 0.0 || from >= cells_[a];
             if (misses) break;
             // Truncation is the floor here: both are clamped to zero or more.

@@ -6,7 +6,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -16,6 +15,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "recognition/nearest_points.hpp"
@@ -67,7 +67,7 @@ class SeenSpace {
         // The outline: pixels the object's points fall on, grown by kSlack pixels. Kept as the
         // running sums of the points per pixel (a summed-area table) over the box of the image
         // the outline lies in, so that a pixel's square of slack is four reads.
-        std::vector<std::size_t> hits;
+        std::vector<std::pair<long, long>> hits;  // (u, v)
         hits.reserve(o.points.size());
         long u_min = std::numeric_limits<long>::max(), v_min = u_min, u_max = -1, v_max = -1;
         for (const Eigen::Vector3f& p : o.points) {
@@ -77,47 +77,39 @@ class SeenSpace {
             u_max = std::max(u_max, u);
             v_min = std::min(v_min, v);
             v_max = std::max(v_max, v);
-            hits.push_back(static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u));
+            hits.emplace_back(u, v);
         }
         if (hits.empty()) return;
         box_u_ = std::max(0L, u_min - kSlack);
         box_v_ = std::max(0L, v_min - kSlack);
         box_width_ = std::min(static_cast<long>(width_) - 1, u_max + kSlack) - box_u_ + 1;
         box_height_ = std::min(static_cast<long>(height_) - 1, v_max + kSlack) - box_v_ + 1;
-        // sums_[(v + 1) * (box_width_ + 1) + u + 1]: the points on the box's pixels [0, u] x [0,
-        // v].
+        // sums_[(v + 1) * stride + u + 1]: the points on the box's pixels up to (u, v).
         const std::size_t stride = static_cast<std::size_t>(box_width_) + 1;
         sums_.assign(stride * (static_cast<std::size_t>(box_height_) + 1), 0);
-        for (const std::size_t pixel : hits) {
-            const std::size_t u = pixel % width_ - static_cast<std::size_t>(box_u_);
-            const std::size_t v = pixel / width_ - static_cast<std::size_t>(box_v_);
-            ++sums_[(v + 1) * stride + u + 1];
-        }
+        for (const auto& [u, v] : hits)
+            ++sums_[static_cast<std::size_t>(v - box_v_ + 1) * stride +
+                    static_cast<std::size_t>(u - box_u_ + 1)];
         for (std::size_t v = 1; v <= static_cast<std::size_t>(box_height_); ++v)
             for (std::size_t u = 1; u < stride; ++u)
                 sums_[v * stride + u] += sums_[v * stride + u - 1] + sums_[(v - 1) * stride + u] -
                                          sums_[(v - 1) * stride + u - 1];
     }
 
-    // Whether something nearer than the point (by `margin`) hides it in the frame.
-    bool hidden(const Eigen::Vector3d& p, double margin) const {
-        if (frame_ == nullptr) return false;
+    // What the sensor saw at a model point, its pixel found once.
+    struct Look {
+        int violation = -1;   // 1: the sensor saw through the point; 0: consistent; -1: unknown
+        bool hidden = false;  // something nearer than the point (by the margin) hides it
+    };
+    Look look(const Eigen::Vector3d& p, double margin) const {
         long u = 0, v = 0;
-        if (!project(p, u, v)) return true;
-        const Eigen::Vector3f& seen =
-            frame_->points[static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u)];
-        return !std::isfinite(seen.z()) || static_cast<double>(seen.z()) < p.z() - margin;
-    }
-
-    // 1: the sensor saw through the point; 0: consistent or hidden; -1: unknown.
-    int violates(const Eigen::Vector3d& p, double margin) const {
-        long u = 0, v = 0;
-        if (!project(p, u, v)) return -1;
-        if (frame_ == nullptr) return on_outline(u - box_u_, v - box_v_) ? 0 : 1;
-        const Eigen::Vector3f& seen =
-            frame_->points[static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u)];
-        if (!std::isfinite(seen.z())) return -1;
-        return static_cast<double>(seen.z()) > p.z() + margin ? 1 : 0;
+        if (!project(p, u, v)) return Look{.violation = -1, .hidden = frame_ != nullptr};
+        if (frame_ == nullptr)
+            return Look{.violation = on_outline(u - box_u_, v - box_v_) ? 0 : 1, .hidden = false};
+        const double seen =
+            frame_->points[static_cast<std::size_t>(v) * width_ + static_cast<std::size_t>(u)].z();
+        if (!std::isfinite(seen)) return Look{.violation = -1, .hidden = true};
+        return Look{.violation = seen > p.z() + margin ? 1 : 0, .hidden = seen < p.z() - margin};
     }
 
   private:
@@ -476,12 +468,12 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             }
         }
         const Eigen::Vector3d& p = points[i];
-        const int v = seen.violates(p, options.violation_margin);
-        if (v >= 0) {
+        const SeenSpace::Look look = seen.look(p, options.violation_margin);
+        if (look.violation >= 0) {
             ++decided;
-            violations += static_cast<std::size_t>(v);
+            violations += static_cast<std::size_t>(look.violation);
         }
-        if (seen.hidden(p, options.violation_margin)) continue;
+        if (look.hidden) continue;
         ++exposed;
         // Looked up by pixel among the object's points, the support came out lower at the rim
         // of the object than by the nearest of its samples, and the proving ground lost
