@@ -82,6 +82,7 @@ GeneratedSceneSet generate_scenes(const std::string& root, const std::string& ou
                                         {"model", m.file},
                                         {"pose", detail::row_major_json(o.pose)},
                                         {"scale", m.scale},
+                                        {"size", o.size},
                                         {"visible", o.visible},
                                         {"pixels", o.pixels},
                                         {"labelled", o.labelled},

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
@@ -18,9 +19,9 @@ std::vector<ClutterModel> load_clutter_models(const std::string& root, const std
     std::vector<ClutterModel> models(plans.size());
     parallel_for(plans.size(), threads, [&](std::size_t i) {
         ClutterModel& m = models[i];
-        m.mesh = load_mesh(plans[i].file.path);
-        m.scale = plans[i].scale(m.mesh);
-        for (Eigen::Vector3f& v : m.mesh.vertices) v = (v.cast<double>() * m.scale).cast<float>();
+        Mesh mesh = load_mesh(plans[i].file.path);
+        m.scale = plans[i].scale(mesh);
+        m.mesh = scaled_mesh(std::move(mesh), m.scale);
         m.category = plans[i].file.category;
         m.file = plans[i].file.file;
     });

@@ -65,19 +65,26 @@ RenderedSequence render_sequence(const ClutterComposer& composer, std::size_t in
     const ClutterScene scene = composer.compose(index);
     const Eigen::Isometry3d camera_to_world = scene.world_to_camera.inverse();
     std::vector<SceneObject> objects;
+    std::vector<Mesh> sized(scene.objects.size());  // objects not of their models' size
     RenderedSequence out;
     out.truth["folder"] = folder.filename().string();
     out.truth["type"] = to_string(scene.type);
     out.truth["objects"] = nlohmann::json::array();
-    for (const ClutterObject& o : scene.objects) {
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const ClutterObject& o = scene.objects[i];
         const ClutterModel& m = composer.models()[o.model];
-        // pose: file coordinates -> camera with the scale; the mesh is already in metres.
+        // pose: file coordinates -> camera with the scale and size; the mesh is in metres.
         Eigen::Matrix4d unscale = Eigen::Matrix4d::Identity();
-        unscale.topLeftCorner<3, 3>() /= m.scale;
+        unscale.topLeftCorner<3, 3>() /= m.scale * o.size;
         Eigen::Isometry3d to_world;
         to_world.matrix() = camera_to_world.matrix() * o.pose * unscale;
         to_world.makeAffine();
-        objects.push_back({&m.mesh, to_world});
+        const Mesh* mesh = &m.mesh;
+        if (o.size != 1.0) {
+            sized[i] = scaled_mesh(m.mesh, o.size);
+            mesh = &sized[i];
+        }
+        objects.push_back({mesh, to_world});
         out.truth["objects"].push_back(
             {{"object_id", o.object_id}, {"class", m.category}, {"model", m.file}});
     }

@@ -39,6 +39,11 @@ double Mesh::bounding_radius() const {
     return radius;
 }
 
+Mesh scaled_mesh(Mesh mesh, double factor) {
+    for (Eigen::Vector3f& v : mesh.vertices) v = (v.cast<double>() * factor).cast<float>();
+    return mesh;
+}
+
 void check_mesh(const Mesh& mesh, const std::string& what) {
     if (mesh.triangles.empty()) throw std::invalid_argument(what + ": mesh has no triangle");
     if (mesh.vertices.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))

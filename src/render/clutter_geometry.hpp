@@ -43,7 +43,8 @@ ModelShape analyse(const Mesh& mesh);
 // A posed model on the table.
 struct Body {
     std::size_t model = 0;
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // model (metres) -> world
+    double size = 1.0;  // the model's metres times this (ClutterOptions::size_spread)
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // sized model (metres) -> world
     Hull hull;                                               // world xy
     double zmin = 0.0, zmax = 0.0;
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();

@@ -41,23 +41,25 @@ std::size_t ClutterComposer::Impl::pick_model(ClutterRandom& random, Accept acce
 }
 
 Body ClutterComposer::Impl::make_body(std::size_t model, const Eigen::Matrix3d& rotation,
-                                      const std::string& placement) const {
+                                      const std::string& placement, double size) const {
     Body body;
     body.model = model;
+    body.size = size;
     body.placement = placement;
     const Mesh& mesh = models[model].mesh;
-    const Eigen::Vector3d centre = (0.5 * (mesh.min_corner() + mesh.max_corner())).cast<double>();
+    const Eigen::Vector3d centre =
+        (0.5 * size * (mesh.min_corner() + mesh.max_corner()).cast<double>()).eval();
     body.pose.linear() = rotation;
     body.pose.translation() = -rotation * centre;
     std::vector<Vec2> xy;
     body.zmin = std::numeric_limits<double>::infinity();
     body.zmax = -body.zmin;
     for (const Eigen::Vector3d& p : shapes[model].support)
-        xy.push_back((body.pose * p).head<2>().cast<float>());
+        xy.push_back((body.pose * (size * p)).head<2>().cast<float>());
     // Heights from every vertex: an object rests exactly on what is below it.
     const Eigen::RowVector3d z_row = body.pose.matrix().row(2).head<3>();
     for (const Eigen::Vector3f& v : mesh.vertices) {
-        const double z = z_row.dot(v.cast<double>()) + body.pose.translation().z();
+        const double z = size * z_row.dot(v.cast<double>()) + body.pose.translation().z();
         body.zmin = std::min(body.zmin, z);
         body.zmax = std::max(body.zmax, z);
     }
@@ -87,7 +89,10 @@ Body ClutterComposer::Impl::random_body(ClutterRandom& random, std::size_t model
                            0.5 * std::numbers::pi);
         placement = "lying";
     }
-    return make_body(model, rotation_about(Eigen::Vector3d::UnitZ(), yaw) * base, placement);
+    // Drawn only with a spread, so that scenes without one are those of earlier releases.
+    const double spread = std::log1p(options.size_spread);
+    const double size = spread > 0.0 ? std::exp(random.uniform(-spread, spread)) : 1.0;
+    return make_body(model, rotation_about(Eigen::Vector3d::UnitZ(), yaw) * base, placement, size);
 }
 
 double ClutterComposer::Impl::lying_share(std::size_t model) const {
@@ -152,7 +157,7 @@ bool ClutterComposer::Impl::place_touching(ClutterRandom& random, Body& body,
             const Eigen::Vector3d u(std::cos(angle), std::sin(angle), 0.0);
             const Eigen::Matrix3d tilt = rotation_about(u.cross(Eigen::Vector3d::UnitZ()),
                                                         tilt_deg * std::numbers::pi / 180.0);
-            body = make_body(body.model, tilt * original.pose.linear(), "leaning");
+            body = make_body(body.model, tilt * original.pose.linear(), "leaning", body.size);
         }
         slide_from(body, bodies[anchor], angle, 0.0, random.uniform(0.0, max_gap));
         if (free(body, bodies, 0.001, static_cast<int>(anchor))) return true;

@@ -53,11 +53,12 @@ struct ClutterComposer::Impl {
     /// then one of its models, so that categories with many models do not fill every scene.
     template <class Accept>
     std::size_t pick_model(detail::ClutterRandom& random, Accept accept) const;
-    /// The model posed by `rotation` (about its bounding box centre), lowest point on z = 0,
-    /// footprint centred at the origin.
+    /// The model scaled by `size` and posed by `rotation` (about its bounding box centre),
+    /// lowest point on z = 0, footprint centred at the origin.
     detail::Body make_body(std::size_t model, const Eigen::Matrix3d& rotation,
-                           const std::string& placement) const;
-    /// Upright (or, with `lying`, on its side) at a random yaw.
+                           const std::string& placement, double size) const;
+    /// Upright (or, with `lying`, on its side) at a random yaw, of a random size where
+    /// options.size_spread > 0.
     detail::Body random_body(detail::ClutterRandom& random, std::size_t model,
                              double lying_share) const;
     /// The share of poses in which the model lies on its side.

@@ -75,6 +75,8 @@ ClutterComposer::ClutterComposer(std::vector<ClutterModel> models, ClutterOption
     check_range(options.min_elevation, options.max_elevation, 1.0, 89.0, "camera elevation");
     check_range(options.wall_share, options.wall_share, 0.0, 1.0, "wall share");
     check_range(options.edge_share, options.edge_share, 0.0, 1.0, "edge share");
+    check_range(options.size_spread, options.size_spread, 0.0, kClutterMaxSizeSpread,
+                "size spread");
     if (options.types.empty()) options.types = clutter_types();
     impl_->shapes.reserve(models.size());
     for (std::size_t m = 0; m < models.size(); ++m) {
@@ -185,8 +187,18 @@ ClutterScene ClutterComposer::compose(std::size_t index) const {
         surrounding_labels.push_back(0);
     }
 
+    // Objects of another size than their models' are rendered from scaled copies.
+    std::vector<Mesh> sized(bodies.size());
     std::vector<SceneObject> objects;
-    for (const Body& b : bodies) objects.push_back({&impl_->models[b.model].mesh, b.pose});
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+        const Body& b = bodies[i];
+        const Mesh* mesh = &impl_->models[b.model].mesh;
+        if (b.size != 1.0) {
+            sized[i] = scaled_mesh(*mesh, b.size);
+            mesh = &sized[i];
+        }
+        objects.push_back({mesh, b.pose});
+    }
     for (const Mesh& m : surroundings) objects.push_back({&m, Eigen::Isometry3d::Identity()});
 
     SceneOptions render;
@@ -216,8 +228,9 @@ ClutterScene ClutterComposer::compose(std::size_t index) const {
         object.model = bodies[i].model;
         object.object_id = kClutterFirstObjectId + static_cast<std::uint32_t>(i);
         Eigen::Matrix4d scale = Eigen::Matrix4d::Identity();
-        scale.topLeftCorner<3, 3>() *= impl_->models[bodies[i].model].scale;
+        scale.topLeftCorner<3, 3>() *= impl_->models[bodies[i].model].scale * bodies[i].size;
         object.pose = (scene.world_to_camera * bodies[i].pose).matrix() * scale;
+        object.size = bodies[i].size;
         object.placement = bodies[i].placement;
         object.pixels = pixels[i];
         object.labelled = pixels[i] >= kClutterMinLabelledPixels;

@@ -75,6 +75,10 @@ class ClutterSceneTest : public ::testing::Test {
         return esf::ClutterComposer(models_, options);
     }
 
+    // Every labelled pixel on its object's surface under the truth pose, objects resting and
+    // apart (TruthPosesExplainEveryPixel).
+    void expect_truth_explains_every_pixel(const esf::ClutterComposer& c) const;
+
     std::vector<esf::ClutterModel> models_;
     std::vector<Shape> shapes_;
 };
@@ -98,8 +102,7 @@ TEST_F(ClutterSceneTest, TypesComeInTurnAndParse) {
 
 // Every labelled pixel lies on the surface of its object under the truth pose; table pixels lie
 // on z = 0 of the world; objects rest on the table or on another object and never overlap.
-TEST_F(ClutterSceneTest, TruthPosesExplainEveryPixel) {
-    const esf::ClutterComposer c = composer();
+void ClutterSceneTest::expect_truth_explains_every_pixel(const esf::ClutterComposer& c) const {
     std::map<esf::ClutterType, int> occluded_objects;
     std::set<std::string> placements;
     for (std::size_t index = 0; index < 21; ++index) {
@@ -190,6 +193,51 @@ TEST_F(ClutterSceneTest, TruthPosesExplainEveryPixel) {
     EXPECT_TRUE(placements.count("leaning"));
 }
 
+TEST_F(ClutterSceneTest, TruthPosesExplainEveryPixel) {
+    expect_truth_explains_every_pixel(composer());
+}
+
+// Objects of other sizes than their models': the truth pose carries the size, so the same
+// checks hold in the mesh file's coordinates.
+TEST_F(ClutterSceneTest, TruthPosesExplainEveryPixelOfResizedObjects) {
+    esf::ClutterOptions options;
+    options.size_spread = 0.4;
+    expect_truth_explains_every_pixel(composer(options));
+}
+
+TEST_F(ClutterSceneTest, SizesSpreadWithinTheirBoundsAndEnterThePose) {
+    esf::ClutterOptions options;
+    options.seed = 3;
+    options.size_spread = 0.25;
+    const esf::ClutterComposer spread = composer(options);
+    double smallest = 2.0, largest = 0.0;
+    for (std::size_t index = 0; index < 14; ++index)
+        for (const esf::ClutterObject& o : spread.compose(index).objects) {
+            EXPECT_GE(o.size, 1.0 / 1.25 - 1e-12);
+            EXPECT_LE(o.size, 1.25 + 1e-12);
+            smallest = std::min(smallest, o.size);
+            largest = std::max(largest, o.size);
+            // The upper-left block is size x rotation (the models are in metres: scale 1).
+            const Eigen::Matrix3d linear = o.pose.topLeftCorner<3, 3>();
+            EXPECT_NEAR(linear.col(0).norm(), o.size, 1e-9);
+            EXPECT_NEAR(
+                (linear.transpose() * linear / (o.size * o.size) - Eigen::Matrix3d::Identity())
+                    .norm(),
+                0.0, 1e-9);
+        }
+    EXPECT_LT(smallest, 0.9);
+    EXPECT_GT(largest, 1.1);
+
+    // Without a spread, every object has its model's size and the scene is the default's.
+    options.size_spread = 0.0;
+    const esf::ClutterScene none = composer(options).compose(4);
+    options = {};
+    options.seed = 3;
+    const esf::ClutterScene plain = composer(options).compose(4);
+    EXPECT_EQ(none.cloud.labels, plain.cloud.labels);
+    for (const esf::ClutterObject& o : none.objects) EXPECT_EQ(o.size, 1.0);
+}
+
 TEST_F(ClutterSceneTest, CylindricScenesHoldRoundModelsOnly) {
     esf::ClutterOptions options;
     options.types = {esf::ClutterType::kCylindric};
@@ -222,6 +270,11 @@ TEST_F(ClutterSceneTest, RejectsBadInput) {
     far.min_distance = 2.0;
     far.max_distance = 1.0;
     EXPECT_THROW(esf::ClutterComposer(models_, far), std::invalid_argument);
+    for (const double spread : {-0.1, 1.5, std::nan("")}) {
+        esf::ClutterOptions sized;
+        sized.size_spread = spread;
+        EXPECT_THROW(esf::ClutterComposer(models_, sized), std::invalid_argument) << spread;
+    }
     std::vector<esf::ClutterModel> huge = {models_[0]};
     for (Eigen::Vector3f& v : huge[0].mesh.vertices) v *= 1000.0f;  // millimetres, not metres
     EXPECT_THROW(esf::ClutterComposer(huge, {}), std::invalid_argument);

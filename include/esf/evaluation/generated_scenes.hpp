@@ -10,8 +10,10 @@
 //   DIR/truth.json      {"seed", "root", "scenes": [{"file", "type", "wall", "table_edge",
 //                       "camera" (world -> camera, 16 numbers row-major), "objects": [{"object_id",
 //                       "class", "model" (relative to the root), "pose" (16 numbers row-major: the
-//                       mesh file's coordinates -> camera, scale included), "scale", "visible",
-//                       "pixels", "labelled", "placement", "type"}]}]}
+//                       mesh file's coordinates -> camera, scale and size included), "scale"
+//                       (file units -> metres), "size" (the object's against its model's:
+//                       ClutterOptions::size_spread), "visible", "pixels", "labelled",
+//                       "placement", "type"}]}]}
 //
 // Each file is written atomically; the same options give byte-identical files at any thread
 // count.

@@ -23,6 +23,9 @@ struct Mesh {
     double bounding_radius() const;
 };
 
+/// The mesh with every vertex times `factor` (computed in double), about the file's origin.
+Mesh scaled_mesh(Mesh mesh, double factor);
+
 /// Throws std::invalid_argument when the mesh has no triangle, a triangle index outside
 /// [0, vertices.size()) or a non-finite vertex. `what` names the mesh in the message.
 void check_mesh(const Mesh& mesh, const std::string& what = "mesh");

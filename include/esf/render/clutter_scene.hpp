@@ -73,6 +73,7 @@ inline constexpr double kClutterMinDistance = 0.6;    ///< metres, camera to the
 inline constexpr double kClutterMaxDistance = 1.5;    ///< metres
 inline constexpr double kClutterMinElevation = 25.0;  ///< degrees above the table
 inline constexpr double kClutterMaxElevation = 65.0;  ///< degrees
+inline constexpr double kClutterMaxSizeSpread = 1.0;  ///< ClutterOptions::size_spread's largest
 /// Height of the floor below the table top (metres), seen past a table edge.
 inline constexpr double kClutterTableHeight = 0.74;
 /// Object labels are kClutterLabelDivisor * id with ids from kClutterFirstObjectId, as in the
@@ -93,6 +94,11 @@ struct ClutterOptions {
     /// Share of scenes with a wall behind the objects, and with a table edge near them.
     double wall_share = 0.25;
     double edge_share = 0.3;
+    /// Objects other than their models' sizes: each placed object is its model scaled by a
+    /// factor drawn log-uniformly from [1 / (1 + size_spread), 1 + size_spread], as real
+    /// instances of a category are larger or smaller than the models of it a database holds.
+    /// 0 (the default): every object at its model's size. Within [0, kClutterMaxSizeSpread].
+    double size_spread = 0.0;
     /// Scene i is of type types[i % types.size()]; empty: every type in turn.
     std::vector<ClutterType> types;
     std::uint64_t seed = 0;
@@ -103,8 +109,10 @@ struct ClutterObject {
     std::size_t model = 0;        ///< index into the composer's models
     std::uint32_t object_id = 0;  ///< label / kClutterLabelDivisor; kClutterFirstObjectId + index
     /// Mesh file coordinates -> camera (metres), scale included: the upper-left 3x3 block is
-    /// scale * rotation.
+    /// scale * rotation (the model's file units -> metres times the object's size).
     Eigen::Matrix4d pose = Eigen::Matrix4d::Identity();
+    /// The object's size against its model's (1 unless ClutterOptions::size_spread > 0).
+    double size = 1.0;
     /// Share of the object's pixels (seen alone from the same camera, without noise) that the
     /// scene shows (without noise): 0 when hidden or out of view.
     double visible = 0.0;
