@@ -22,7 +22,7 @@ struct RecognizerArgs {
 };
 
 /// --no-verify, --verify-meshes ROOT, --candidates N, --accept-score S, --shape-weight W,
-/// --no-merge-parts, --verify-within-class:
+/// --fixed-sizes, --no-merge-parts, --verify-within-class:
 /// hypothesis verification (on by default, with the surfaces the database stores).
 inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) {
     cmd.add_flag_callback(
@@ -48,6 +48,11 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
                    "object's cylinder-box contrast and the model's (0: the score alone)")
         ->check(CLI::Range(0.0, 2.0))
         ->capture_default_str();
+    cmd.add_flag_callback(
+        "--fixed-sizes", [&options] { options.verification.every_size_free = false; },
+        "Fit the size of only the models whose size the catalog guesses (default: every "
+        "model's size within [0.8, 1.25] while the candidates compete, the chosen one's pose "
+        "then fitted at its model's size)");
     cmd.add_flag_callback(
         "--no-merge-parts", [&options] { options.merge_parts = false; },
         "Scenes: keep the objects as segmented (default: two neighbouring objects become one "

@@ -183,10 +183,11 @@ void bind_recognition(py::module_& m) {
                          bool use_weights, int samplings, const std::string& vote, bool every_view,
                          int threads, bool verify, const std::optional<fs::path>& verify_meshes,
                          std::size_t candidates, bool verify_within_class, bool merge_parts,
-                         double shape_weight) {
+                         double shape_weight, bool fixed_sizes) {
                  RecognizerOptions options;
                  options.merge_parts = merge_parts;
                  options.verification.shape_weight = shape_weight;
+                 options.verification.every_size_free = !fixed_sizes;
                  options.verify = verify;
                  if (verify_meshes) options.verification_meshes = verify_meshes->string();
                  options.verification.candidates = candidates;
@@ -215,6 +216,7 @@ void bind_recognition(py::module_& m) {
              py::arg("verify_within_class") = !defaults.verification.decide_class,
              py::arg("merge_parts") = defaults.merge_parts,
              py::arg("shape_weight") = defaults.verification.shape_weight,
+             py::arg("fixed_sizes") = !defaults.verification.every_size_free,
              "Opens DATABASE (esf train ... -o DATABASE): the ``k`` nearest models (each by its "
              "nearest view; ``every_view``: the k nearest views) are the neighbours; ``vote`` "
              "'nearest' names the nearest one's class (the others give the confidence), "
@@ -230,7 +232,9 @@ void bind_recognition(py::module_& m) {
              "``merge_parts`` makes two neighbouring objects one when one model fitted to both "
              "explains them better than their own fits. ``shape_weight`` (0 to 2): candidates "
              "compete by fit score less this times the gap between the object's and the "
-             "model's cylinder-box contrast. Raises "
+             "model's cylinder-box contrast. ``fixed_sizes`` fits the size of only the models "
+             "whose size the catalog guesses (default: every model's size within [0.8, 1.25] "
+             "while the candidates compete). Raises "
              "FileNotFoundError / "
              "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")

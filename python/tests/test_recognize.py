@@ -134,6 +134,14 @@ def test_render_and_scene(meshes, database):
     assert [len(o.points) for o in plain] == [len(o.points) for o in objects]
     with pytest.raises(ValueError, match="shape weight"):
         esf.Recognizer(database, shape_weight=3.0)
+    # Sizes fixed as the catalog gives them: the same clusters, each with a rigid pose
+    # (the models are metric: their poses are rotations and translations either way).
+    fixed = esf.Recognizer(database, fixed_sizes=True).scene(scene)
+    assert [len(o.points) for o in fixed] == [len(o.points) for o in objects]
+    for o in fixed + objects:
+        if o.classification is not None and o.classification.fit is not None:
+            r = o.pose[:3, :3]
+            np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-4)
 
 
 def test_train_progress_interrupt_and_resume(tmp_path, meshes):

@@ -487,6 +487,7 @@ void Recognizer::verify(Classification& c, const Observation& observation,
     const auto guessed = [&](int model) {
         return impl_->models.at(static_cast<std::size_t>(model)).scale != 1.0;
     };
+    const auto size_free = [&](int model) { return o.every_size_free || guessed(model); };
     std::vector<std::size_t> picks;  // neighbours fitted, each with its fit in `fits`
     std::vector<PoseFit> fits;
     const PreparedObservation prepared(observation, o.camera);
@@ -496,7 +497,8 @@ void Recognizer::verify(Classification& c, const Observation& observation,
         if (it != c.neighbours.end() && (o.decide_class || it->class_name == c.class_name)) {
             picks.push_back(static_cast<std::size_t>(it - c.neighbours.begin()));
             fits.push_back(fit_model(*impl_->surface(prior->model_id), prior->pose.cast<double>(),
-                                     prepared, o, guessed(prior->model_id), FitStart::kCameraPose));
+                                     prepared, o, size_free(prior->model_id),
+                                     FitStart::kCameraPose));
         }
     }
     // Candidates compete by score, less the shape term where both contrasts are known.
@@ -541,7 +543,7 @@ void Recognizer::verify(Classification& c, const Observation& observation,
                                          : -std::numeric_limits<double>::infinity();
             picks.push_back(i);
             fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
-                                     prepared, o, guessed(model), FitStart::kTrainingView,
+                                     prepared, o, size_free(model), FitStart::kTrainingView,
                                      must_beat));
         }
     }
@@ -556,6 +558,10 @@ void Recognizer::verify(Classification& c, const Observation& observation,
                 c.neighbours.begin() + static_cast<std::ptrdiff_t>(chosen) + 1);
     const NeighbourView& n = c.neighbours.front();
     adopt_neighbour(c, n);
+    // A model of known size competed at a free size: its pose and fit are given at its own.
+    if (o.every_size_free && !guessed(n.model_id) && !fits[best].abandoned)
+        fits[best] = fit_model(*impl_->surface(n.model_id), fits[best].model_to_camera, prepared, o,
+                               false, FitStart::kCameraPose);
     const double scale = impl_->models.at(static_cast<std::size_t>(n.model_id)).scale;
     Eigen::Matrix4d scaled = fits[best].model_to_camera;
     scaled.topLeftCorner<3, 3>() *= scale;

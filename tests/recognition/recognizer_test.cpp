@@ -21,7 +21,9 @@
 #include "esf/core/error.hpp"
 #include "esf/core/parallel.hpp"
 #include "esf/io/cloud_io.hpp"
+#include "esf/mesh/model_surface.hpp"
 #include "esf/recognition/knn_index.hpp"
+#include "esf/recognition/pose_verification.hpp"
 #include "esf/training/database.hpp"
 #include "esf/training/training.hpp"
 #include "support/error_of.hpp"
@@ -183,6 +185,35 @@ TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone)
     meshes.verification_meshes = (root_ / "absent").string();
     EXPECT_THROW(esf::Recognizer(copy, meshes), esf::IoError);
     fs::remove_all(dir);
+}
+
+// Every model's size is free while candidates compete (objects are larger or smaller than the
+// models of their class), and the chosen fit of a model of known size is then fitted again at
+// that size: a mug 20 % larger than the model (the view scaled about the camera: the same
+// image, farther away) is named mug, and its pose is the model's rigid motion, scale 1.
+TEST_F(RecognizerTest, EverySizeIsFreeWhileCandidatesCompeteAndThePoseIsMetric) {
+    esf::Points view = held_out_view("mug", kHeldOut[1], 1);
+    for (Eigen::Vector3f& p : view) p *= 1.2f;
+    for (const bool every_size_free : {true, false}) {
+        SCOPED_TRACE(every_size_free ? "every size free" : "fixed sizes");
+        esf::RecognizerOptions options;
+        options.verification.every_size_free = every_size_free;
+        const esf::Classification c = esf::Recognizer(db_path_, options).classify(view);
+        EXPECT_EQ(c.class_name, "mug");
+        ASSERT_TRUE(c.fit.has_value());
+        const Eigen::Matrix3d linear = c.pose.topLeftCorner<3, 3>().cast<double>();
+        EXPECT_NEAR((linear.transpose() * linear - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-4);
+        EXPECT_NEAR(linear.determinant(), 1.0, 1e-4);
+    }
+    // What the competition sees: at a free size the model explains more of the larger mug.
+    const esf::Recognizer recognizer(db_path_);
+    const esf::Classification c = recognizer.classify(view);
+    const esf::ModelSurface surface = esf::sample_model_surface(meshes_.at("mug"), 1.0, 2000, 3);
+    const esf::Observation seen{view, nullptr};
+    const esf::PoseFit fixed = esf::fit_model(surface, c.pose.cast<double>(), seen, {}, false);
+    const esf::PoseFit free = esf::fit_model(surface, c.pose.cast<double>(), seen, {}, true);
+    EXPECT_GT(free.scale, 1.1);
+    EXPECT_GT(free.fit.inliers, fixed.fit.inliers + 0.05);
 }
 
 TEST_F(RecognizerTest, APriorFitIsKeptWhileItFitsAndOtherwiseOneCandidateMore) {

@@ -61,6 +61,13 @@ struct VerificationOptions {
     /// to a can model that fits about as well (BENCHMARKS.md, "Shape agreement"). In [0, 2]; 0:
     /// the score alone. The chosen fit's own score is reported unchanged.
     double shape_weight = 0.25;
+    /// true: every model's size is fitted (within [0.8, 1.25]) while the candidates compete, as
+    /// objects are larger or smaller than the database's models of their class; the chosen fit
+    /// of a model whose size is known (metric in the catalog) is then fitted again at that
+    /// size, from where it stood, so that its pose and fit are the model's own (BENCHMARKS.md,
+    /// "Every model's size free"). false: only the size of a model whose size the catalog
+    /// guesses is fitted.
+    bool every_size_free = true;
     int iterations = 10;                ///< ICP iterations (>= 1)
     std::size_t surface_points = 2000;  ///< samples of each model's surface
     double inlier_distance = 0.004;     ///< metres
@@ -143,8 +150,8 @@ class PreparedModel {
 };
 
 /// Aligns `surface` to the observation from the rotation of `view_pose` (model -> the training
-/// camera; its scale, if any, is removed) and scores the result. With `free_scale` (a model whose
-/// size is a guess: not metric in the catalog), the model's size is fitted too. Throws
+/// camera; its scale, if any, is removed) and scores the result. With `free_scale`, the model's
+/// size is fitted too, within [0.8, 1.25] of the surface's. Throws
 /// std::invalid_argument for fewer than 3 observed points, a frame that is not organised or not of
 /// the camera's size, bad options or a non-finite pose.
 PoseFit fit_model(const ModelSurface& surface, const Eigen::Matrix4d& view_pose,
