@@ -167,6 +167,8 @@ void validate(const VerificationOptions& o) {
     if (!(o.prior_tolerance >= 0.0 && o.prior_tolerance <= 2.0))
         fail("prior tolerance must be in [0, 2]");
     if (!(o.shape_weight >= 0.0 && o.shape_weight <= 2.0)) fail("shape weight must be in [0, 2]");
+    if (!(o.resize_weight >= 0.0 && o.resize_weight <= 10.0))
+        fail("resize weight must be in [0, 10]");
     if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
         fail("inlier distance must be in (0, 1) m");
     if (!(o.violation_margin > 0.0 && o.violation_margin < 1.0))

@@ -551,6 +551,14 @@ void Recognizer::verify(Classification& c, const Observation& observation,
     std::size_t best = 0;
     for (std::size_t j = 1; j < fits.size(); ++j)
         if (compared(j) > compared(best)) best = j;
+    // Look-alike models of the class named (a small and a large bottle of one make): the one
+    // that needs the least resizing names the model and pose; the class stays.
+    const std::string& named = c.neighbours[picks[best]].class_name;
+    const auto resized = [&](std::size_t j) {
+        return compared(j) - o.resize_weight * std::abs(std::log(fits[j].scale));
+    };
+    for (std::size_t j = 0; j < fits.size(); ++j)
+        if (c.neighbours[picks[j]].class_name == named && resized(j) > resized(best)) best = j;
 
     // The best fit first, the other neighbours in their order.
     const std::size_t chosen = picks[best];

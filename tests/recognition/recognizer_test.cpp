@@ -28,6 +28,7 @@
 #include "esf/training/training.hpp"
 #include "support/error_of.hpp"
 #include "support/recognizer_fixture.hpp"
+#include "support/test_meshes.hpp"
 
 namespace fs = std::filesystem;
 
@@ -214,6 +215,59 @@ TEST_F(RecognizerTest, EverySizeIsFreeWhileCandidatesCompeteAndThePoseIsMetric) 
     const esf::PoseFit free = esf::fit_model(surface, c.pose.cast<double>(), seen, {}, true);
     EXPECT_GT(free.scale, 1.1);
     EXPECT_GT(free.fit.inliers, fixed.fit.inliers + 0.05);
+}
+
+// Look-alike models of one class: a can and the same can a fifth larger. With every size free
+// both explain a view of the smaller one about equally; the one that needs no resizing names the
+// model and the pose, and the class stays can.
+TEST(RecognizerLookAlikes, TheModelThatNeedsTheLeastResizingNamesTheModel) {
+    const fs::path root = temp_dir();
+    const auto write = [&](const std::string& category, const std::string& name,
+                           const esf::Mesh& mesh) {
+        fs::create_directories(root / "meshes" / category);
+        esf::write_ply_mesh((root / "meshes" / category / (name + ".ply")).string(), mesh);
+    };
+    const esf::Mesh small = esf::test::standing_cylinder(0.035, 0.11);
+    write("can", "small", small);
+    write("can", "large", esf::test::standing_cylinder(0.042, 0.132));
+    write("box", "carton", esf::test::standing_box(0.09, 0.06, 0.2));
+    const std::string db_path = (root / "cans.sqlite").string();
+    {
+        esf::Database db(db_path, esf::OpenMode::kWrite);
+        esf::TrainingOptions options;
+        options.descriptor = "esf";
+        options.render.level = 1;
+        options.esf.samples = kSamples;
+        options.seed = 5;
+        esf::train((root / "meshes").string(), db, options);
+    }
+    esf::RenderOptions render;
+    render.level = 0;
+    render.seed = 99;
+    const esf::MeshRenderer renderer(small, render);
+    const Eigen::Vector3d centre = renderer.centre() * renderer.scale();
+    const esf::Recognizer recognizer(db_path);
+    esf::RecognizerOptions unweighted;
+    unweighted.verification.resize_weight = 0.0;
+    const esf::Recognizer by_score(db_path, unweighted);
+    std::size_t large_by_score = 0;
+    for (std::size_t i = 0; i < kHeldOut.size(); ++i) {
+        SCOPED_TRACE("view " + std::to_string(i));
+        const Eigen::Vector3d eye = centre + renderer.camera_distance() * kHeldOut[i].normalized();
+        const esf::Points view = renderer.render_pose(esf::look_at(eye, centre), i + 1);
+        const esf::Classification c = recognizer.classify(view);
+        EXPECT_EQ(c.class_name, "can");
+        EXPECT_EQ(c.best_model, "small");
+        const esf::Classification s = by_score.classify(view);
+        EXPECT_EQ(s.class_name, "can");
+        large_by_score += s.best_model == "large";
+    }
+    // By score alone the larger can wins some views: the rule is what names the smaller one.
+    EXPECT_GT(large_by_score, 0u);
+    esf::RecognizerOptions bad;
+    bad.verification.resize_weight = -1.0;
+    EXPECT_THROW(esf::Recognizer(db_path, bad), std::invalid_argument);
+    fs::remove_all(root);
 }
 
 TEST_F(RecognizerTest, APriorFitIsKeptWhileItFitsAndOtherwiseOneCandidateMore) {

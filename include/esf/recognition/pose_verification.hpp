@@ -68,6 +68,12 @@ struct VerificationOptions {
     /// "Every model's size free"). false: only the size of a model whose size the catalog
     /// guesses is fitted.
     bool every_size_free = true;
+    /// Among the fits of the class the best fit names, the model is the one with the highest
+    /// compared score less this times |ln(fitted size)|: of look-alike models (a small and a
+    /// large bottle of one make), the one that needs the least resizing names the model and
+    /// pose. The class is not changed (BENCHMARKS.md, "Look-alike models"). In [0, 10]; 0: the
+    /// compared score alone.
+    double resize_weight = 1.0;
     int iterations = 10;                ///< ICP iterations (>= 1)
     std::size_t surface_points = 2000;  ///< samples of each model's surface
     double inlier_distance = 0.004;     ///< metres
