@@ -46,7 +46,7 @@ struct EvalArgs {
     std::string title;
     bool json = false;
     std::string scenes;
-    Grouping grouping = SegmentationOptions{}.grouping;
+    SceneInputArgs scene_input;  // --scenes: the segmentation's options, as esf scene has them
 };
 
 std::string percent_of(std::size_t a, std::size_t b) {
@@ -76,7 +76,7 @@ void run_scene_eval(const EvalArgs& args) {
     if (!args.no_weights) warn_if_weights_stale(args.database, recognizer.info().setup.kind.name);
     warn_if_unverified(recognizer);
     SceneEvaluationOptions options;
-    options.segmentation.grouping = args.grouping;
+    options.segmentation = segmentation_options(args.scene_input);
     options.segmentation.threads = args.threads;
     Progress progress("eval", set.scenes.size());
     options.progress = [&](std::size_t done, std::size_t) { progress.update(done); };
@@ -366,9 +366,7 @@ void add_eval_command(CLI::App& app) {
                     "Evaluate segmentation and recognition on labelled scenes (CSV: scene_file, "
                     "object_id, class[, scene_type])")
         ->check(CLI::ExistingFile);
-    add_enum_option(*cmd, "--grouping", args->grouping,
-                    "With --scenes: how points above the table become objects (as in esf "
-                    "segment)");
+    add_segmentation_options(*cmd, args->scene_input);
     cmd->add_option("--title", args->title, "Title of the report (default: esf eval: DB)");
     cmd->add_flag("--json", args->json, "Print one JSON object instead of the tables");
     cmd->callback([args] { run_eval(*args); });

@@ -277,6 +277,15 @@ TEST_F(CliEvalTest, ScenesThroughSegmentationAndRecognition) {
     EXPECT_EQ(j["types"][2]["found"], 1);
     EXPECT_EQ(j["types"][1]["merged"], 2);
 
+    // The segmentation's thresholds as esf scene has them: clusters of a million points or
+    // more only, so none is kept and every object is missed.
+    run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes) +
+              " --min-cluster-points 1000000 --json");
+    ASSERT_EQ(run.code, 0) << run.err;
+    j = nlohmann::json::parse(run.out);
+    EXPECT_EQ(j["types"][2]["found"], 0);
+    EXPECT_EQ(j["types"][2]["missed"], 4);
+
     // --report: scenes.json holds what --json prints; index.html the tables.
     const fs::path report = dir() / "scene_report";
     run = esf("eval " + quoted(db()) + " --scenes " + quoted(scenes) + " --report " +
