@@ -9,7 +9,9 @@
 # $PROVING_GROUND_DIR (default: a new temporary folder, removed at the end); scenes and databases
 # already there are reused. Extra `esf eval` options come from $PROVING_GROUND_EVAL (e.g.
 # "--no-verify", or "--verify-meshes {meshes}" for databases trained before surfaces were
-# stored); {meshes} in it stands for the mesh folder.
+# stored); {meshes} in it stands for the mesh folder. $PROVING_GROUND_SIZE_SPREAD (default 0)
+# makes the objects other than their models' sizes (`esf generate-scenes --size-spread`; the
+# sized proving ground of BENCHMARKS.md uses 0.25); its scenes are kept apart from the others.
 set -euo pipefail
 bench_name=proving_ground
 source "$(dirname "$0")/bench_env.sh"
@@ -25,16 +27,19 @@ if [[ -z "$work" ]]; then
 fi
 mkdir -p "$work"
 eval_args="${PROVING_GROUND_EVAL:-}"
+size_spread="${PROVING_GROUND_SIZE_SPREAD:-0}"
+sized=""
+[[ "$size_spread" == 0 ]] || sized="_size$size_spread"
 for ((k = 0; k < folds; k++)); do
     echo "== fold $k/$folds: train on the other folds, $scenes scenes of this fold's groups" >&2
     [[ -f "$work/train$k.json" ]] ||
         "$esf" train "$data/meshes" -o "$work/fold$k.sqlite" --other-folds "$k/$folds" --json \
             > "$work/train$k.json"
-    [[ -f "$work/generate$k.json" ]] ||
-        "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k" -n "$scenes" --seed "$seed" \
-            --fold "$k/$folds" --json > "$work/generate$k.json"
+    [[ -f "$work/generate$k$sized.json" ]] ||
+        "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k$sized" -n "$scenes" --seed "$seed" \
+            --fold "$k/$folds" --size-spread "$size_spread" --json > "$work/generate$k$sized.json"
     # shellcheck disable=SC2086
-    "$esf" eval "$work/fold$k.sqlite" --scenes "$work/scenes$k/scenes.csv" --json \
+    "$esf" eval "$work/fold$k.sqlite" --scenes "$work/scenes$k$sized/scenes.csv" --json \
         ${eval_args//\{meshes\}/$data/meshes} > "$work/eval$k.json"
 done
 python3 - "$work" "$folds" <<'PY'
