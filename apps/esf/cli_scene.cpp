@@ -1,6 +1,8 @@
 #include "cli_scene.hpp"
 
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 
 #include "cli_common.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -83,9 +85,13 @@ void add_segmentation_options(CLI::App& cmd, SceneInputArgs& args) {
         ->capture_default_str();
     cmd.add_option("--min-cluster-points", o.min_cluster_points,
                    "Smaller clusters are dropped (points)")
+        ->check(
+            CLI::Range(std::uint64_t{0}, std::uint64_t{std::numeric_limits<std::uint32_t>::max()}))
         ->capture_default_str();
     cmd.add_option("--max-cluster-points", o.max_cluster_points,
                    "Larger clusters are dropped (points)")
+        ->check(
+            CLI::Range(std::uint64_t{0}, std::uint64_t{std::numeric_limits<std::uint32_t>::max()}))
         ->capture_default_str();
     cmd.add_flag("--keep-unorganised", args.keep_unorganised,
                  "Segment an unorganised cloud as it is, also when its points are a depth "

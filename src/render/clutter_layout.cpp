@@ -48,7 +48,7 @@ Body ClutterComposer::Impl::make_body(std::size_t model, const Eigen::Matrix3d& 
     body.placement = placement;
     const Mesh& mesh = models[model].mesh;
     const Eigen::Vector3d centre =
-        (0.5 * size * (mesh.min_corner() + mesh.max_corner()).cast<double>()).eval();
+        0.5 * size * (mesh.min_corner() + mesh.max_corner()).cast<double>();
     body.pose.linear() = rotation;
     body.pose.translation() = -rotation * centre;
     std::vector<Vec2> xy;

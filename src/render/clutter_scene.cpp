@@ -75,8 +75,10 @@ ClutterComposer::ClutterComposer(std::vector<ClutterModel> models, ClutterOption
     check_range(options.min_elevation, options.max_elevation, 1.0, 89.0, "camera elevation");
     check_range(options.wall_share, options.wall_share, 0.0, 1.0, "wall share");
     check_range(options.edge_share, options.edge_share, 0.0, 1.0, "edge share");
-    check_range(options.size_spread, options.size_spread, 0.0, kClutterMaxSizeSpread,
-                "size spread");
+    if (!(options.size_spread >= 0.0 && options.size_spread <= kClutterMaxSizeSpread))
+        throw std::invalid_argument("scene composer: size spread must be in [0, " +
+                                    std::to_string(kClutterMaxSizeSpread) + "], got " +
+                                    std::to_string(options.size_spread));
     if (options.types.empty()) options.types = clutter_types();
     impl_->shapes.reserve(models.size());
     for (std::size_t m = 0; m < models.size(); ++m) {

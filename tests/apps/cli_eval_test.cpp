@@ -285,6 +285,11 @@ TEST_F(CliEvalTest, ScenesThroughSegmentationAndRecognition) {
     j = nlohmann::json::parse(run.out);
     EXPECT_EQ(j["types"][2]["found"], 0);
     EXPECT_EQ(j["types"][2]["missed"], 4);
+    // A negative count is a usage error, not a huge unsigned one.
+    EXPECT_EQ(
+        esf("eval " + quoted(db()) + " --scenes " + quoted(scenes) + " --min-cluster-points -5")
+            .code,
+        1);
 
     // --report: scenes.json holds what --json prints; index.html the tables.
     const fs::path report = dir() / "scene_report";
