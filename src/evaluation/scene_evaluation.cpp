@@ -1,5 +1,6 @@
 #include "esf/evaluation/scene_evaluation.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -38,6 +39,14 @@ double SceneTypeSummary::found_rate() const { return ratio(found, objects); }
 double SceneTypeSummary::end_to_end() const { return ratio(correct, labelled); }
 double SceneTypeSummary::pose_rate() const { return ratio(pose_correct, posed); }
 
+double SceneTypeSummary::rotation_median() const {
+    if (rotation_errors.empty()) return std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> sorted = rotation_errors;
+    std::sort(sorted.begin(), sorted.end());
+    const std::size_t n = sorted.size();
+    return n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+}
+
 namespace {
 
 // Points on each true model's surface (mesh file coordinates), loaded once.
@@ -49,14 +58,20 @@ class ModelPoints {
         if (it == points_.end()) {
             const Mesh mesh = load_mesh((fs::path(root_) / model).string());
             it = points_.emplace(model, sample_model_surface(mesh, 1.0, kPoints, 0).points).first;
+            symmetric_.emplace(model, has_symmetry(mesh));
         }
         return it->second;
+    }
+    bool symmetric(const std::string& model) {
+        of(model);
+        return symmetric_.at(model);
     }
 
   private:
     static constexpr std::size_t kPoints = 400;
     std::string root_;
     std::map<std::string, Points> points_;
+    std::map<std::string, bool> symmetric_;
 };
 
 }  // namespace
@@ -159,6 +174,8 @@ void judge_pose(const SceneTruth& truth, ModelPoints& points,
     outcome.add_s =
         add_s(model, t.pose, outcome.pose->cast<double>()) / posed_diameter(model, t.pose);
     outcome.pose_correct = outcome.add_s < kAddSThreshold;
+    if (!points.symmetric(t.model))
+        outcome.rotation_error = rotation_error_degrees(t.pose, outcome.pose->cast<double>());
 }
 
 }  // namespace
@@ -242,6 +259,8 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                     t->correct += outcome.correct;
                     t->posed += outcome.pose_judged;
                     t->pose_correct += outcome.pose_correct;
+                    if (outcome.rotation_error)
+                        t->rotation_errors.push_back(*outcome.rotation_error);
                 }
                 report.objects.push_back(std::move(outcome));
             }

@@ -25,6 +25,10 @@ using detail::xml_escape;
 /// "12.3 %" for a fraction 0.123.
 std::string percent(double fraction) { return detail::percent_text(fraction) + " %"; }
 
+nlohmann::json finite_or_null(double x) {
+    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr);
+}
+
 std::string share(std::size_t a, std::size_t b) {
     return b ? percent(static_cast<double>(a) / static_cast<double>(b)) : "-";
 }
@@ -85,7 +89,9 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
                                 {"end_to_end", t.end_to_end()},
                                 {"posed", t.posed},
                                 {"pose_correct", t.pose_correct},
-                                {"pose_rate", t.pose_rate()}});
+                                {"pose_rate", t.pose_rate()},
+                                {"rotations", t.rotation_errors.size()},
+                                {"rotation_median_deg", finite_or_null(t.rotation_median())}});
     out["objects"] = nlohmann::json::array();
     for (const SceneObjectOutcome& o : report.objects)
         out["objects"].push_back(
@@ -106,7 +112,9 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
              {"add_s", o.pose_judged && std::isfinite(o.add_s) ? nlohmann::json(o.add_s)
                                                                : nlohmann::json(nullptr)},
              {"pose_judged", o.pose_judged},
-             {"pose_correct", o.pose_correct}});
+             {"pose_correct", o.pose_correct},
+             {"rotation_error_deg",
+              o.rotation_error ? nlohmann::json(*o.rotation_error) : nlohmann::json(nullptr)}});
     out["failures"] = nlohmann::json::array();
     for (const SceneFailure& f : report.failures)
         out["failures"].push_back({{"file", f.file}, {"error", f.error}});
@@ -133,7 +141,10 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
     html << "<table><tr><th>scene type</th><th>scenes</th><th>objects</th><th>found</th>"
             "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
             "<th>one cluster</th><th>end to end</th>"
-         << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th>" : "") << "</tr>\n";
+         << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th><th>rotations judged</th>"
+                     "<th>median rotation error</th>"
+                   : "")
+         << "</tr>\n";
     for (const SceneTypeSummary& t : report.types) {
         html << "<tr><td>" << xml_escape(t.type) << "</td><td>" << t.scenes << "</td><td>"
              << t.objects << "</td><td>" << t.found << "</td><td>" << t.split << "</td><td>"
@@ -141,7 +152,12 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
              << "</td><td>" << share(t.found, t.objects) << "</td><td>"
              << share(t.correct, t.labelled) << "</td>";
         if (poses)
-            html << "<td>" << t.posed << "</td><td>" << share(t.pose_correct, t.posed) << "</td>";
+            html << "<td>" << t.posed << "</td><td>" << share(t.pose_correct, t.posed)
+                 << "</td><td>" << t.rotation_errors.size() << "</td><td>"
+                 << (t.rotation_errors.empty()
+                         ? std::string("-")
+                         : detail::fixed_text(t.rotation_median(), 1) + "&deg;")
+                 << "</td>";
         html << "</tr>\n";
     }
     html << "</table>\n";
@@ -150,7 +166,10 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
                 "holds, against truth.json (meshes under "
              << xml_escape(report.truth)
              << "); ADD-S: mean distance from the model under the true pose to the model under "
-                "the found one, as a share of its diameter.</p>\n";
+                "the found one, as a share of its diameter. Rotations: the objects named with "
+                "their own "
+                "model where that model has no symmetry (no turn about an axis maps it onto "
+                "itself), the angle between the true and the found rotation.</p>\n";
     html << "<p>Segmentation " << detail::fixed_text(report.segment_ms, 2)
          << " ms, description and classification " << detail::fixed_text(report.recognize_ms, 2)
          << " ms per frame.</p>\n";

@@ -227,31 +227,6 @@ TEST_F(GeneratedScenesTest, RejectsBadRequests) {
 
 }  // namespace
 
-namespace {
-
-TEST(PoseAccuracy, AddSOfHandComputedPoses) {
-    const esf::Points two = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0)};
-    Eigen::Matrix4d shifted = Eigen::Matrix4d::Identity();
-    shifted(2, 3) = 0.1;
-    EXPECT_NEAR(esf::add_s(two, Eigen::Matrix4d::Identity(), shifted), 0.1, 1e-12);
-    shifted(2, 3) = 0.0;
-    shifted(0, 3) = 1.0;  // (0,0,0) -> nearest (1,0,0): 1; (1,0,0) -> itself: 0
-    EXPECT_NEAR(esf::add_s(two, Eigen::Matrix4d::Identity(), shifted), 0.5, 1e-12);
-    // A half turn about the segment's middle maps the pair onto itself: ADD-S 0.
-    Eigen::Matrix4d turned = Eigen::Matrix4d::Identity();
-    turned.topLeftCorner<3, 3>() =
-        Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    turned(0, 3) = 1.0;
-    EXPECT_NEAR(esf::add_s(two, Eigen::Matrix4d::Identity(), turned), 0.0, 1e-12);
-    Eigen::Matrix4d scaled = Eigen::Matrix4d::Identity() * 3.0;
-    scaled(3, 3) = 1.0;
-    EXPECT_NEAR(esf::posed_diameter(two, scaled), 3.0, 1e-12);
-    EXPECT_THROW(esf::add_s({}, Eigen::Matrix4d::Identity(), Eigen::Matrix4d::Identity()),
-                 std::invalid_argument);
-}
-
-}  // namespace
-
 TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTheModels) {
     esf::SceneGenerationOptions options;
     options.scenes = 7;
@@ -310,11 +285,73 @@ TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTh
     EXPECT_GT(own_model, 0u);
     EXPECT_GE(static_cast<double>(placed), 0.75 * static_cast<double>(own_model));
     EXPECT_EQ(b.pose_correct, placed);
+    // Boxes have symmetries (half turns): no rotation error is given for them.
+    for (const esf::SceneObjectOutcome& o : verified.objects) EXPECT_FALSE(o.rotation_error);
+    EXPECT_TRUE(b.rotation_errors.empty());
+    EXPECT_TRUE(std::isnan(b.rotation_median()));
     // Reports carry the pose columns.
     const nlohmann::json json = nlohmann::json::parse(esf::scene_report_json(verified));
     EXPECT_EQ(json["types"].back()["pose_correct"].get<std::size_t>(), placed);
+    EXPECT_TRUE(json["types"].back()["rotation_median_deg"].is_null());
     EXPECT_NE(esf::scene_report_html(verified, "t").find("ADD-S &lt; 0.1 d"), std::string::npos);
     esf::SceneEvaluationReport without_truth = plain;
     without_truth.truth.clear();
     EXPECT_EQ(esf::scene_report_html(without_truth, "t").find("ADD-S"), std::string::npos);
+}
+
+TEST_F(GeneratedScenesTest, RotationErrorsAreGivenForModelsWithoutSymmetry) {
+    // Boxes with a knob on one end of a side (no turn maps them onto themselves) join the boxes.
+    std::string rows;
+    for (int i = 0; i < 2; ++i) {
+        const std::string name = "knob" + std::to_string(i);
+        fs::create_directories(root_ / "knobbed");
+        esf::write_ply_mesh((root_ / "knobbed" / (name + ".ply")).string(),
+                            esf::test::knobbed_box(0.12 + 0.03 * i, 0.07, 0.09, 0.035));
+        rows += "knobbed/" + name + ".ply,knobbed,test," + name + ",k" + std::to_string(i) +
+                ",0.15,yes\n";
+    }
+    std::ofstream(root_ / "catalog.csv", std::ios::app) << rows;
+    esf::SceneGenerationOptions options;
+    options.scenes = 8;
+    options.clutter.seed = 4;
+    esf::generate_scenes(root_.string(), (base_ / "s").string(), options);
+    const std::string db_path = (base_ / "db.sqlite").string();
+    {
+        esf::Database db(db_path, esf::OpenMode::kWrite);
+        esf::TrainingOptions training;
+        training.render.level = 0;
+        training.descriptor_options.samples = 5000;
+        esf::train(root_.string(), db, training);
+    }
+    const esf::SceneSet set = esf::read_scene_set((base_ / "s" / "scenes.csv").string());
+    const esf::SceneEvaluationReport report = esf::evaluate_scenes(esf::Recognizer(db_path), set);
+    const esf::SceneTruth truth = *esf::read_scene_truth(set.path);
+    std::size_t rotations = 0, near = 0;
+    for (const esf::SceneObjectOutcome& o : report.objects) {
+        const esf::TruthObject& t =
+            truth.objects.at({fs::path(o.scene).filename().string(), o.segmentation.object_id});
+        // Only knobbed models named with their own model, posed, have one.
+        const bool own = o.pose_judged && std::isfinite(o.add_s);
+        EXPECT_EQ(o.rotation_error.has_value(), own && t.class_name == "knobbed")
+            << o.scene << " " << o.segmentation.object_id;
+        if (!o.rotation_error) continue;
+        ++rotations;
+        EXPECT_EQ(*o.rotation_error, esf::rotation_error_degrees(t.pose, o.pose->cast<double>()));
+        near += *o.rotation_error < 10.0;
+    }
+    ASSERT_GT(rotations, 0u);
+    // The fits find the knob: most of them turned less than 10 degrees from the truth.
+    EXPECT_GE(2 * near, rotations);
+    const esf::SceneTypeSummary& all = report.types.back();
+    EXPECT_EQ(all.rotation_errors.size(), rotations);
+    EXPECT_TRUE(std::isfinite(all.rotation_median()));
+    const nlohmann::json json = nlohmann::json::parse(esf::scene_report_json(report));
+    EXPECT_EQ(json["types"].back()["rotations"].get<std::size_t>(), rotations);
+    EXPECT_DOUBLE_EQ(json["types"].back()["rotation_median_deg"].get<double>(),
+                     all.rotation_median());
+    std::size_t rows_with_rotation = 0;
+    for (const nlohmann::json& o : json["objects"])
+        rows_with_rotation += !o["rotation_error_deg"].is_null();
+    EXPECT_EQ(rows_with_rotation, rotations);
+    EXPECT_NE(esf::scene_report_html(report, "t").find("median rotation error"), std::string::npos);
 }

@@ -1,6 +1,7 @@
 #pragma once
-// Meshes of known geometry for tests: a box and a closed cylinder standing on z = 0, centred on
-// the z axis, wound counter-clockwise seen from outside (or clockwise on request).
+// Meshes of known geometry for tests: a box (with or without a knob) and a closed cylinder
+// standing on z = 0, centred on the z axis, wound counter-clockwise seen from outside (or clockwise
+// on request).
 
 #include <cmath>
 #include <numbers>
@@ -27,6 +28,21 @@ inline Mesh standing_box(double sx, double sy, double sz, bool clockwise = false
             mesh.triangles.emplace_back(f[0], f[2], f[3]);
         }
     }
+    return mesh;
+}
+
+/// standing_box(sx, sy, sz) with a cube of side k standing out of its +y face near its +x end,
+/// at mid height: a shape that no turn maps onto itself.
+inline Mesh knobbed_box(double sx, double sy, double sz, double k) {
+    Mesh mesh = standing_box(sx, sy, sz);
+    const Mesh knob = standing_box(k, k, k);
+    const int base = static_cast<int>(mesh.vertices.size());
+    const Eigen::Vector3f at(static_cast<float>(0.5 * sx - 0.75 * k),
+                             static_cast<float>(0.5 * sy + 0.5 * k),
+                             static_cast<float>(0.5 * sz - 0.5 * k));
+    for (const Eigen::Vector3f& v : knob.vertices) mesh.vertices.push_back(v + at);
+    for (const Eigen::Vector3i& t : knob.triangles)
+        mesh.triangles.push_back(t + Eigen::Vector3i::Constant(base));
     return mesh;
 }
 

@@ -80,6 +80,9 @@ struct SceneObjectOutcome {
     bool pose_judged = false;
     double add_s = 0.0;
     bool pose_correct = false;  ///< judged and add_s < kAddSThreshold
+    /// Judged, named with its own model, and that model without a symmetry (has_symmetry):
+    /// the angle between the true and the predicted rotation, degrees; otherwise empty.
+    std::optional<double> rotation_error;
 };
 
 struct SceneTypeSummary {
@@ -90,9 +93,13 @@ struct SceneTypeSummary {
     std::size_t correct = 0;       ///< of them: found and named right
     std::size_t posed = 0;         ///< objects whose pose was judged (truth.json)
     std::size_t pose_correct = 0;  ///< of them: ADD-S below kAddSThreshold of the diameter
-    double found_rate() const;     ///< found / objects
-    double end_to_end() const;     ///< correct / labelled
-    double pose_rate() const;      ///< pose_correct / posed
+    /// The rotation errors of the objects that have one (SceneObjectOutcome::rotation_error),
+    /// degrees, in the order of the objects.
+    std::vector<double> rotation_errors;
+    double found_rate() const;       ///< found / objects
+    double end_to_end() const;       ///< correct / labelled
+    double pose_rate() const;        ///< pose_correct / posed
+    double rotation_median() const;  ///< of rotation_errors; NaN when there are none
 };
 
 struct SceneFailure {
