@@ -103,6 +103,16 @@ void run_scene_eval(const EvalArgs& args) {
                         t.objects, t.found, t.split, t.merged, t.missed, t.shared_clusters,
                         percent_of(t.found, t.objects).c_str(),
                         percent_of(t.correct, t.labelled).c_str());
+        std::printf("\n%-16s %7s %7s %7s %9s %10s  %s\n", "class", "objects", "found", "named",
+                    "one-clust", "end-to-end", "most often named instead");
+        for (const SceneClassSummary& c : report.classes)
+            std::printf(
+                "%-16s %7zu %7zu %7zu %8s%% %9s%%  %s\n", c.class_name.c_str(), c.objects, c.found,
+                c.correct, percent_of(c.found, c.objects).c_str(),
+                percent_of(c.correct, c.objects).c_str(),
+                c.confused_count
+                    ? (c.confused_with + " (" + std::to_string(c.confused_count) + ")").c_str()
+                    : "-");
         std::printf(
             "\nfound: one cluster holds >= 80 %% of the object and is >= 80 %% that object; "
             "shared: clusters holding parts of two or more objects; end-to-end: found and named "

@@ -39,6 +39,34 @@ double SceneTypeSummary::found_rate() const { return ratio(found, objects); }
 double SceneTypeSummary::end_to_end() const { return ratio(correct, labelled); }
 double SceneTypeSummary::pose_rate() const { return ratio(pose_correct, posed); }
 
+double SceneClassSummary::found_rate() const { return ratio(found, objects); }
+double SceneClassSummary::end_to_end() const { return ratio(correct, objects); }
+
+std::vector<SceneClassSummary> summarize_classes(std::span<const SceneObjectOutcome> objects) {
+    std::map<std::string, SceneClassSummary> classes;
+    std::map<std::string, std::map<std::string, std::size_t>> wrong;  // class -> name -> count
+    for (const SceneObjectOutcome& o : objects) {
+        if (o.true_class.empty()) continue;
+        SceneClassSummary& c = classes[o.true_class];
+        ++c.objects;
+        if (o.segmentation.outcome != SegmentOutcome::kFound) continue;
+        ++c.found;
+        c.correct += o.correct;
+        if (!o.correct) ++wrong[o.true_class][o.predicted_class];
+    }
+    std::vector<SceneClassSummary> out;
+    for (auto& [name, c] : classes) {
+        c.class_name = name;
+        for (const auto& [predicted, count] : wrong[name])
+            if (count > c.confused_count) {
+                c.confused_with = predicted.empty() ? "(none)" : predicted;
+                c.confused_count = count;
+            }
+        out.push_back(c);
+    }
+    return out;
+}
+
 double SceneTypeSummary::rotation_median() const {
     if (rotation_errors.empty()) return std::numeric_limits<double>::quiet_NaN();
     std::vector<double> sorted = rotation_errors;
@@ -274,6 +302,7 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
         if (name != "all") report.types.push_back(summary);
     }
     if (types.count("all")) report.types.push_back(types["all"]);
+    report.classes = summarize_classes(report.objects);
     if (frames) {
         report.segment_ms = segment_ms / static_cast<double>(frames);
         report.recognize_ms = recognize_ms / static_cast<double>(frames);

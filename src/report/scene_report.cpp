@@ -92,6 +92,16 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
                                 {"pose_rate", t.pose_rate()},
                                 {"rotations", t.rotation_errors.size()},
                                 {"rotation_median_deg", finite_or_null(t.rotation_median())}});
+    out["classes"] = nlohmann::json::array();
+    for (const SceneClassSummary& c : report.classes)
+        out["classes"].push_back({{"class", c.class_name},
+                                  {"objects", c.objects},
+                                  {"found", c.found},
+                                  {"correct", c.correct},
+                                  {"found_rate", c.found_rate()},
+                                  {"end_to_end", c.end_to_end()},
+                                  {"confused_with", c.confused_with},
+                                  {"confused_count", c.confused_count}});
     out["objects"] = nlohmann::json::array();
     for (const SceneObjectOutcome& o : report.objects)
         out["objects"].push_back(
@@ -161,15 +171,28 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
         html << "</tr>\n";
     }
     html << "</table>\n";
+    if (!report.classes.empty()) {
+        html << "<table><tr><th>class</th><th>objects</th><th>found</th><th>named right</th>"
+                "<th>one cluster</th><th>end to end</th><th>most often named instead</th></tr>\n";
+        for (const SceneClassSummary& c : report.classes)
+            html << "<tr><td>" << xml_escape(c.class_name) << "</td><td>" << c.objects
+                 << "</td><td>" << c.found << "</td><td>" << c.correct << "</td><td>"
+                 << share(c.found, c.objects) << "</td><td>" << share(c.correct, c.objects)
+                 << "</td><td>"
+                 << (c.confused_count ? xml_escape(c.confused_with) + " (" +
+                                            std::to_string(c.confused_count) + ")"
+                                      : std::string("-"))
+                 << "</td></tr>\n";
+        html << "</table>\n";
+    }
     if (poses)
         html << "<p>Poses: objects at least half visible whose model the database "
                 "holds, against truth.json (meshes under "
              << xml_escape(report.truth)
              << "); ADD-S: mean distance from the model under the true pose to the model under "
-                "the found one, as a share of its diameter. Rotations: the objects named with "
-                "their own "
-                "model where that model has no symmetry (no turn about an axis maps it onto "
-                "itself), the angle between the true and the found rotation.</p>\n";
+                "the found one, as a share of its diameter. Rotations: of the objects named with "
+                "their own model where that model has no symmetry (no turn about an axis maps "
+                "it onto itself), the angle between the true and the found rotation.</p>\n";
     html << "<p>Segmentation " << detail::fixed_text(report.segment_ms, 2)
          << " ms, description and classification " << detail::fixed_text(report.recognize_ms, 2)
          << " ms per frame.</p>\n";

@@ -285,6 +285,15 @@ TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTh
     EXPECT_GT(own_model, 0u);
     EXPECT_GE(static_cast<double>(placed), 0.75 * static_cast<double>(own_model));
     EXPECT_EQ(b.pose_correct, placed);
+    // The classes' rows add up to the overall one.
+    std::size_t class_objects = 0, class_correct = 0;
+    for (const esf::SceneClassSummary& c : verified.classes) {
+        class_objects += c.objects;
+        class_correct += c.correct;
+    }
+    EXPECT_EQ(class_objects, b.labelled);
+    EXPECT_EQ(class_correct, b.correct);
+    EXPECT_EQ(verified.classes.size(), 2u);  // box and block
     // Boxes have symmetries (half turns): no rotation error is given for them.
     for (const esf::SceneObjectOutcome& o : verified.objects) EXPECT_FALSE(o.rotation_error);
     EXPECT_TRUE(b.rotation_errors.empty());

@@ -24,7 +24,8 @@ constexpr double kPi = std::numbers::pi;
 Eigen::Matrix4d pose(double scale, double angle, const Eigen::Vector3d& axis,
                      const Eigen::Vector3d& t = Eigen::Vector3d::Zero()) {
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-    m.topLeftCorner<3, 3>() = scale * Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+    m.topLeftCorner<3, 3>() =
+        scale * Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
     m.topRightCorner<3, 1>() = t;
     return m;
 }
@@ -57,17 +58,16 @@ TEST(PoseAccuracy, RotationErrorIsTheAngleBetweenTheRotationsWhateverTheScales) 
                                             pose(1.5, 4 * kPi / 18, axis, {0, 0, 1})),
                 30.0, 1e-9);
     // Symmetric in its arguments, 0 for equal rotations, 180 for a half turn.
-    EXPECT_NEAR(esf::rotation_error_degrees(pose(1.5, 4 * kPi / 18, axis),
-                                            pose(2.0, kPi / 18, axis)),
-                30.0, 1e-9);
-    EXPECT_NEAR(esf::rotation_error_degrees(pose(1.0, 0.3, axis), pose(7.0, 0.3, axis)), 0.0,
-                1e-5);
+    EXPECT_NEAR(
+        esf::rotation_error_degrees(pose(1.5, 4 * kPi / 18, axis), pose(2.0, kPi / 18, axis)), 30.0,
+        1e-9);
+    EXPECT_NEAR(esf::rotation_error_degrees(pose(1.0, 0.3, axis), pose(7.0, 0.3, axis)), 0.0, 1e-5);
     EXPECT_NEAR(esf::rotation_error_degrees(Eigen::Matrix4d::Identity(),
                                             pose(1.0, kPi, Eigen::Vector3d::UnitX())),
                 180.0, 1e-6);
     // Turns about two perpendicular axes compose: 90 about z after 90 about x is 120 degrees.
-    Eigen::Matrix4d both = pose(1.0, kPi / 2, Eigen::Vector3d::UnitZ()) *
-                           pose(1.0, kPi / 2, Eigen::Vector3d::UnitX());
+    Eigen::Matrix4d both =
+        pose(1.0, kPi / 2, Eigen::Vector3d::UnitZ()) * pose(1.0, kPi / 2, Eigen::Vector3d::UnitX());
     EXPECT_NEAR(esf::rotation_error_degrees(Eigen::Matrix4d::Identity(), both), 120.0, 1e-9);
     // A mirror, a flattened block and a pose that is not finite are refused.
     Eigen::Matrix4d mirror = Eigen::Matrix4d::Identity();

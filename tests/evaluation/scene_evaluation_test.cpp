@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "esf/core/error.hpp"
 #include "esf/io/cloud_io.hpp"
@@ -104,6 +105,69 @@ TEST(SceneReport, HtmlEscapesAndListsFailuresFirst) {
     const nlohmann::json j = nlohmann::json::parse(esf::scene_report_json(report));
     EXPECT_EQ(j["objects"][1]["outcome"], "split");
     EXPECT_EQ(j["types"][0]["end_to_end"], 0.5);
+}
+
+esf::SceneObjectOutcome outcome(const std::string& truth, esf::SegmentOutcome segmentation,
+                                const std::string& predicted) {
+    esf::SceneObjectOutcome o;
+    o.true_class = truth;
+    o.segmentation.outcome = segmentation;
+    o.predicted_class = predicted;
+    o.correct = segmentation == esf::SegmentOutcome::kFound && !truth.empty() && predicted == truth;
+    return o;
+}
+
+TEST(SceneClasses, CountsEachTrueClassAndItsCommonestWrongName) {
+    using esf::SegmentOutcome;
+    const std::vector<esf::SceneObjectOutcome> objects = {
+        outcome("can", SegmentOutcome::kFound, "can"),
+        outcome("can", SegmentOutcome::kFound, "box"),
+        outcome("can", SegmentOutcome::kFound, "box"),
+        outcome("can", SegmentOutcome::kFound, "bottle"),
+        outcome("can", SegmentOutcome::kMerged, "box"),  // not found: not a confusion
+        outcome("box", SegmentOutcome::kFound, "box"),
+        outcome("box", SegmentOutcome::kSplit, "box"),
+        outcome("box", SegmentOutcome::kFound, "can"),
+        outcome("box", SegmentOutcome::kFound, "block"),  // a tie: block comes first
+        outcome("", SegmentOutcome::kFound, "can"),       // no true class: left out
+        outcome("bowl", SegmentOutcome::kMissed, ""),
+        outcome("cup", SegmentOutcome::kFound, ""),  // found, but no class given
+    };
+    const std::vector<esf::SceneClassSummary> classes = esf::summarize_classes(objects);
+    ASSERT_EQ(classes.size(), 4u);
+    EXPECT_EQ(classes[0].class_name, "bowl");
+    EXPECT_EQ(classes[0].objects, 1u);
+    EXPECT_EQ(classes[0].found, 0u);
+    EXPECT_EQ(classes[0].confused_count, 0u);
+    EXPECT_EQ(classes[1].class_name, "box");
+    EXPECT_EQ(classes[1].objects, 4u);
+    EXPECT_EQ(classes[1].found, 3u);
+    EXPECT_EQ(classes[1].correct, 1u);
+    EXPECT_EQ(classes[1].confused_with, "block");
+    EXPECT_EQ(classes[1].confused_count, 1u);
+    EXPECT_DOUBLE_EQ(classes[1].end_to_end(), 0.25);
+    EXPECT_EQ(classes[2].class_name, "can");
+    EXPECT_EQ(classes[2].objects, 5u);
+    EXPECT_EQ(classes[2].found, 4u);
+    EXPECT_EQ(classes[2].correct, 1u);
+    EXPECT_EQ(classes[2].confused_with, "box");
+    EXPECT_EQ(classes[2].confused_count, 2u);
+    EXPECT_DOUBLE_EQ(classes[2].found_rate(), 0.8);
+    EXPECT_EQ(classes[3].class_name, "cup");
+    EXPECT_EQ(classes[3].confused_with, "(none)");
+    EXPECT_EQ(classes[3].confused_count, 1u);
+
+    // The reports carry the table.
+    esf::SceneEvaluationReport report;
+    report.objects = objects;
+    report.classes = classes;
+    const nlohmann::json j = nlohmann::json::parse(esf::scene_report_json(report));
+    ASSERT_EQ(j["classes"].size(), 4u);
+    EXPECT_EQ(j["classes"][2]["class"], "can");
+    EXPECT_EQ(j["classes"][2]["confused_with"], "box");
+    EXPECT_EQ(j["classes"][2]["confused_count"], 2);
+    EXPECT_EQ(j["classes"][2]["correct"], 1);
+    EXPECT_NE(esf::scene_report_html(report, "t").find("<td>box (2)</td>"), std::string::npos);
 }
 
 // All 45 labelled mOSD learn scenes: convexity grouping finds far more objects as one cluster

@@ -24,6 +24,7 @@
 #include <functional>
 #include <istream>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -102,6 +103,22 @@ struct SceneTypeSummary {
     double rotation_median() const;  ///< of rotation_errors; NaN when there are none
 };
 
+/// One true class over the scenes: how many of its objects were found as one cluster and named
+/// right, and the class its found objects were most often named instead.
+struct SceneClassSummary {
+    std::string class_name;
+    std::size_t objects = 0, found = 0;
+    std::size_t correct = 0;    ///< found and named right
+    std::string confused_with;  ///< the commonest wrong name of its found objects; empty: none
+    std::size_t confused_count = 0;
+    double found_rate() const;  ///< found / objects
+    double end_to_end() const;  ///< correct / objects
+};
+
+/// The objects with a true class, summed by class (in name order); of two wrong names as common
+/// as each other, the first in name order is the confusion.
+std::vector<SceneClassSummary> summarize_classes(std::span<const SceneObjectOutcome> objects);
+
 struct SceneFailure {
     std::string file;
     std::string error;
@@ -112,8 +129,9 @@ struct SceneEvaluationReport {
     std::string database;  ///< for reports; evaluate_scenes() leaves it empty
     std::string grouping;  ///< "convexity" or "euclidean"
     std::vector<SceneObjectOutcome> objects;
-    std::vector<SceneTypeSummary> types;  ///< by type name, then "all"
-    std::vector<SceneFailure> failures;   ///< scenes that could not be read or segmented
+    std::vector<SceneTypeSummary> types;     ///< by type name, then "all"
+    std::vector<SceneClassSummary> classes;  ///< summarize_classes(objects)
+    std::vector<SceneFailure> failures;      ///< scenes that could not be read or segmented
     /// truth.json found beside the scene set (poses judged); the mesh root it names.
     std::string truth;
     double segment_ms = 0.0;    ///< mean per frame
