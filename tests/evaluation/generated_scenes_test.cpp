@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -64,6 +65,22 @@ class GeneratedScenesTest : public ::testing::Test {
         std::ofstream(root_ / "catalog.csv") << rows;
     }
     void TearDown() override { fs::remove_all(base_); }
+
+    // `scenes` generated scenes of the meshes in base_/s (seed `seed`), and a database of all
+    // the meshes, quickly trained: its path.
+    std::string scenes_and_database(std::size_t scenes, std::uint64_t seed) {
+        esf::SceneGenerationOptions options;
+        options.scenes = scenes;
+        options.clutter.seed = seed;
+        esf::generate_scenes(root_.string(), (base_ / "s").string(), options);
+        const std::string db_path = (base_ / "db.sqlite").string();
+        esf::Database db(db_path, esf::OpenMode::kWrite);
+        esf::TrainingOptions training;
+        training.render.level = 0;
+        training.descriptor_options.samples = 5000;
+        esf::train(root_.string(), db, training);
+        return db_path;
+    }
 
     fs::path base_, root_;
 };
@@ -228,18 +245,7 @@ TEST_F(GeneratedScenesTest, RejectsBadRequests) {
 }  // namespace
 
 TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTheModels) {
-    esf::SceneGenerationOptions options;
-    options.scenes = 7;
-    options.clutter.seed = 2;
-    esf::generate_scenes(root_.string(), (base_ / "s").string(), options);
-    const std::string db_path = (base_ / "db.sqlite").string();
-    {
-        esf::Database db(db_path, esf::OpenMode::kWrite);
-        esf::TrainingOptions training;
-        training.render.level = 0;
-        training.descriptor_options.samples = 5000;
-        esf::train(root_.string(), db, training);
-    }
+    const std::string db_path = scenes_and_database(7, 2);
     const esf::SceneSet set = esf::read_scene_set((base_ / "s" / "scenes.csv").string());
     esf::RecognizerOptions knn_only;
     knn_only.verify = false;
@@ -320,18 +326,7 @@ TEST_F(GeneratedScenesTest, RotationErrorsAreGivenForModelsWithoutSymmetry) {
                 ",0.15,yes\n";
     }
     std::ofstream(root_ / "catalog.csv", std::ios::app) << rows;
-    esf::SceneGenerationOptions options;
-    options.scenes = 8;
-    options.clutter.seed = 4;
-    esf::generate_scenes(root_.string(), (base_ / "s").string(), options);
-    const std::string db_path = (base_ / "db.sqlite").string();
-    {
-        esf::Database db(db_path, esf::OpenMode::kWrite);
-        esf::TrainingOptions training;
-        training.render.level = 0;
-        training.descriptor_options.samples = 5000;
-        esf::train(root_.string(), db, training);
-    }
+    const std::string db_path = scenes_and_database(8, 4);
     const esf::SceneSet set = esf::read_scene_set((base_ / "s" / "scenes.csv").string());
     const esf::SceneEvaluationReport report = esf::evaluate_scenes(esf::Recognizer(db_path), set);
     const esf::SceneTruth truth = *esf::read_scene_truth(set.path);
