@@ -148,7 +148,8 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
          << ". Found: one cluster holds at least 80 % of the object and is at least 80 % that "
             "object; end to end: found and named right.</p>\n";
     const bool poses = !report.truth.empty();
-    html << "<table><tr><th>scene type</th><th>scenes</th><th>objects</th><th>found</th>"
+    html << "<h2>By scene type</h2>\n<table><tr><th>scene "
+            "type</th><th>scenes</th><th>objects</th><th>found</th>"
             "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
             "<th>one cluster</th><th>end to end</th>"
          << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th><th>rotations judged</th>"
@@ -171,8 +172,18 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
         html << "</tr>\n";
     }
     html << "</table>\n";
+    if (poses)
+        html << "<p>Poses: objects at least half visible whose model the database "
+                "holds, against truth.json (meshes under "
+             << xml_escape(report.truth)
+             << "); ADD-S: mean distance from the model under the true pose to the model under "
+                "the found one, as a share of its diameter. Rotations: of the objects named with "
+                "their own model where that model has no symmetry (no turn about an axis maps "
+                "it onto itself), the angle between the true and the found rotation.</p>\n";
     if (!report.classes.empty()) {
-        html << "<table><tr><th>class</th><th>objects</th><th>found</th><th>named right</th>"
+        html << "<h2>By "
+                "class</h2>\n<table><tr><th>class</th><th>objects</th><th>found</th><th>named "
+                "right</th>"
                 "<th>one cluster</th><th>end to end</th><th>most often named instead</th></tr>\n";
         for (const SceneClassSummary& c : report.classes)
             html << "<tr><td>" << xml_escape(c.class_name) << "</td><td>" << c.objects
@@ -185,14 +196,6 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
                  << "</td></tr>\n";
         html << "</table>\n";
     }
-    if (poses)
-        html << "<p>Poses: objects at least half visible whose model the database "
-                "holds, against truth.json (meshes under "
-             << xml_escape(report.truth)
-             << "); ADD-S: mean distance from the model under the true pose to the model under "
-                "the found one, as a share of its diameter. Rotations: of the objects named with "
-                "their own model where that model has no symmetry (no turn about an axis maps "
-                "it onto itself), the angle between the true and the found rotation.</p>\n";
     html << "<p>Segmentation " << detail::fixed_text(report.segment_ms, 2)
          << " ms, description and classification " << detail::fixed_text(report.recognize_ms, 2)
          << " ms per frame.</p>\n";
