@@ -12,6 +12,9 @@
 # stored); {meshes} in it stands for the mesh folder. $PROVING_GROUND_SIZE_SPREAD (default 0)
 # makes the objects other than their models' sizes (`esf generate-scenes --size-spread`; the
 # sized proving ground of BENCHMARKS.md uses 0.25); its scenes are kept apart from the others.
+# $PROVING_GROUND_CATEGORIES (comma-separated) generates scenes of those categories only
+# (`esf generate-scenes --categories`; the household proving ground of BENCHMARKS.md uses
+# box,can,bowl,mug,bottle,cup, the classes of the real scenes); the databases are the same.
 set -euo pipefail
 bench_name=proving_ground
 source "$(dirname "$0")/bench_env.sh"
@@ -28,8 +31,14 @@ fi
 mkdir -p "$work"
 eval_args="${PROVING_GROUND_EVAL:-}"
 size_spread="${PROVING_GROUND_SIZE_SPREAD:-0}"
+categories="${PROVING_GROUND_CATEGORIES:-}"
 sized=""
 [[ "$size_spread" == 0 ]] || sized="_size$size_spread"
+category_args=()
+if [[ -n "$categories" ]]; then
+    sized="${sized}_${categories//,/-}"
+    category_args=(--categories "$categories")
+fi
 for ((k = 0; k < folds; k++)); do
     echo "== fold $k/$folds: train on the other folds, $scenes scenes of this fold's groups" >&2
     [[ -f "$work/train$k.json" ]] ||
@@ -37,7 +46,8 @@ for ((k = 0; k < folds; k++)); do
             > "$work/train$k.json"
     [[ -f "$work/generate$k$sized.json" ]] ||
         "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k$sized" -n "$scenes" --seed "$seed" \
-            --fold "$k/$folds" --size-spread "$size_spread" --json > "$work/generate$k$sized.json"
+            --fold "$k/$folds" --size-spread "$size_spread" "${category_args[@]}" --json \
+            > "$work/generate$k$sized.json"
     # shellcheck disable=SC2086
     "$esf" eval "$work/fold$k.sqlite" --scenes "$work/scenes$k$sized/scenes.csv" --json \
         ${eval_args//\{meshes\}/$data/meshes} > "$work/eval$k.json"

@@ -153,6 +153,9 @@ void GroupOptions::add_to(CLI::App& cmd) {
     cmd.add_option("--exclude-groups", except_,
                    "Not the models of these catalog groups (comma-separated)")
         ->delimiter(',');
+    cmd.add_option("--categories", categories_,
+                   "Only the models of these categories (comma-separated; folds as without it)")
+        ->delimiter(',');
     auto* fold =
         cmd.add_option(
                "--fold", fold_,
@@ -170,6 +173,7 @@ esf::GroupSelection GroupOptions::selection() const {
     esf::GroupSelection selection;
     selection.only = only_;
     selection.except = except_;
+    selection.categories = categories_;
     if (!fold_.empty()) parse_fold(fold_, selection);
     if (!other_folds_.empty()) {
         parse_fold(other_folds_, selection);

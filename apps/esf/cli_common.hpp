@@ -53,15 +53,15 @@ CLI::Option* add_enum_option(CLI::App& cmd, const std::string& name, Enum& value
 /// --catalog CSV and --no-catalog (exclusive): how a mesh root's models are sized and grouped.
 void add_catalog_options(CLI::App& cmd, std::string& catalog, bool& no_catalog);
 
-/// --groups, --exclude-groups, --fold K/N and --other-folds K/N: which catalog groups of a root
-/// a command takes (esf::GroupSelection). Call selection() after parsing.
+/// --groups, --exclude-groups, --categories, --fold K/N and --other-folds K/N: which catalog
+/// groups of a root a command takes (esf::GroupSelection). Call selection() after parsing.
 class GroupOptions {
   public:
     void add_to(CLI::App& cmd);
     esf::GroupSelection selection() const;
 
   private:
-    std::vector<std::string> only_, except_;
+    std::vector<std::string> only_, except_, categories_;
     std::string fold_, other_folds_;
 };
 

@@ -468,6 +468,10 @@ std::vector<PlannedModel> plan_models(const std::string& root, const std::string
             if (std::none_of(plans.begin(), plans.end(),
                              [&](const PlannedModel& p) { return p.group == name; }))
                 throw std::invalid_argument("no group '" + name + "' among the models of " + root);
+    for (const std::string& name : selection.categories)
+        if (std::none_of(plans.begin(), plans.end(),
+                         [&](const PlannedModel& p) { return p.file.category == name; }))
+            throw std::invalid_argument("no category '" + name + "' among the models of " + root);
     if (selection.folds > 1 && (selection.fold < 0 || selection.fold >= selection.folds))
         throw std::invalid_argument("fold " + std::to_string(selection.fold) + " is not in [0, " +
                                     std::to_string(selection.folds) + ")");
@@ -498,6 +502,8 @@ std::vector<PlannedModel> plan_models(const std::string& root, const std::string
     for (PlannedModel& p : plans) {
         if (!selection.only.empty() && !contains(selection.only, p.group)) continue;
         if (contains(selection.except, p.group)) continue;
+        if (!selection.categories.empty() && !contains(selection.categories, p.file.category))
+            continue;
         if (selection.folds > 1) {
             const auto it = fold_of.find(p.group);
             const bool in_fold = it != fold_of.end() && it->second == selection.fold;

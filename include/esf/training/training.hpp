@@ -79,6 +79,9 @@ inline constexpr double kDefaultTypicalExtent = 0.15;
 struct GroupSelection {
     std::vector<std::string> only;    ///< non-empty: only these groups
     std::vector<std::string> except;  ///< never these groups
+    /// Non-empty: only the models of these categories. Folds are dealt as without it (each
+    /// category's groups on their own), so a fold keeps its groups whatever categories are taken.
+    std::vector<std::string> categories;
     /// With folds > 1: the groups of each category are dealt into `folds` folds in an order
     /// fixed by a hash of their names (so every fold holds groups of most categories); a
     /// category with a single group is in no fold (it stays on the training side). `fold` in
@@ -87,7 +90,9 @@ struct GroupSelection {
     int folds = 0;
     bool other_folds = false;
 
-    bool empty() const { return only.empty() && except.empty() && folds <= 1; }
+    bool empty() const {
+        return only.empty() && except.empty() && categories.empty() && folds <= 1;
+    }
 };
 
 /// Parses "K/N" (fold K of N, 0 <= K < N, 2 <= N <= 100) into selection.fold / folds; throws
