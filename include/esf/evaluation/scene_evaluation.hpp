@@ -108,8 +108,10 @@ struct SceneTypeSummary {
 struct SceneClassSummary {
     std::string class_name;
     std::size_t objects = 0, found = 0;
-    std::size_t correct = 0;    ///< found and named right
-    std::string confused_with;  ///< the commonest wrong name of its found objects; empty: none
+    std::size_t correct = 0;  ///< found and named right
+    /// The commonest wrong name of its found objects ("(none)": found but given no class);
+    /// empty when every found object was named right.
+    std::string confused_with;
     std::size_t confused_count = 0;
     double found_rate() const;  ///< found / objects
     double end_to_end() const;  ///< correct / objects
