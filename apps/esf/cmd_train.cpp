@@ -95,6 +95,9 @@ void run_train(const TrainArgs& args) {
     };
 
     require_descriptor(options.descriptor);  // before the database is created
+    // A group or category that is not there, likewise.
+    if (!options.groups.empty())
+        plan_models(args.root, options.catalog, options.use_catalog, options.groups);
     Database db(args.output, OpenMode::kWrite);
     const TrainingResult result = train(args.root, db, options);
     if (bar) bar->finish();

@@ -132,6 +132,20 @@ TEST_F(CliRobustnessTest, NegativeSeedsAreRefusedInOneLine) {
     EXPECT_FALSE(fs::exists(path("never")));
 }
 
+TEST_F(CliRobustnessTest, ASelectionOfNoModelsFailsBeforeADatabaseIsCreated) {
+    for (const std::string selection :
+         {"--categories pear", "--groups none-such", "--categories mug,pear"}) {
+        const fs::path out = path("unselected.sqlite");
+        fs::remove(out);
+        const CliRun r =
+            run("train " + quoted(dir() / "root") + " -o " + quoted(out) + " " + selection);
+        EXPECT_EQ(r.code, 2) << selection;
+        EXPECT_EQ(r.err.rfind("esf: error: no ", 0), 0u) << r.err;
+        EXPECT_EQ(lines(r.err), 1u) << r.err;
+        EXPECT_FALSE(fs::exists(out)) << selection << ": an empty database was left behind";
+    }
+}
+
 TEST_F(CliRobustnessTest, UsageErrorsAreOneLine) {
     const std::vector<std::string> usage_errors = {
         "frobnicate", "classify " + quoted(db()) + " " + quoted(view()) + " -k 0", "describe"};
