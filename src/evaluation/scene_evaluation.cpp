@@ -77,29 +77,31 @@ double SceneTypeSummary::rotation_median() const {
 
 namespace {
 
-// Points on each true model's surface (mesh file coordinates), loaded once.
-class ModelPoints {
+// Each true model, loaded once: points on its surface (mesh file coordinates) and whether it
+// has a symmetry (has_symmetry).
+class TrueModels {
   public:
-    explicit ModelPoints(std::string root) : root_(std::move(root)) {}
-    const Points& of(const std::string& model) {
-        auto it = points_.find(model);
-        if (it == points_.end()) {
+    struct Model {
+        Points points;
+        bool symmetric = false;
+    };
+    explicit TrueModels(std::string root) : root_(std::move(root)) {}
+    const Model& of(const std::string& model) {
+        auto it = models_.find(model);
+        if (it == models_.end()) {
             const Mesh mesh = load_mesh((fs::path(root_) / model).string());
-            it = points_.emplace(model, sample_model_surface(mesh, 1.0, kPoints, 0).points).first;
-            symmetric_.emplace(model, has_symmetry(mesh));
+            it = models_
+                     .emplace(model, Model{sample_model_surface(mesh, 1.0, kPoints, 0).points,
+                                           has_symmetry(mesh)})
+                     .first;
         }
         return it->second;
-    }
-    bool symmetric(const std::string& model) {
-        of(model);
-        return symmetric_.at(model);
     }
 
   private:
     static constexpr std::size_t kPoints = 400;
     std::string root_;
-    std::map<std::string, Points> points_;
-    std::map<std::string, bool> symmetric_;
+    std::map<std::string, Model> models_;
 };
 
 }  // namespace
@@ -186,7 +188,7 @@ SceneSet read_scene_set(const std::string& csv) {
 namespace {
 
 // ADD-S of a found object whose model the database holds, at least half visible.
-void judge_pose(const SceneTruth& truth, ModelPoints& points,
+void judge_pose(const SceneTruth& truth, TrueModels& models,
                 const std::set<std::pair<std::string, std::string>>& held,
                 SceneObjectOutcome& outcome) {
     const auto it = truth.objects.find(
@@ -198,11 +200,11 @@ void judge_pose(const SceneTruth& truth, ModelPoints& points,
     outcome.pose_judged = true;
     outcome.add_s = std::numeric_limits<double>::infinity();
     if (!outcome.correct || outcome.predicted_model != name || !outcome.pose) return;
-    const Points& model = points.of(t.model);
-    outcome.add_s =
-        add_s(model, t.pose, outcome.pose->cast<double>()) / posed_diameter(model, t.pose);
+    const TrueModels::Model& model = models.of(t.model);
+    outcome.add_s = add_s(model.points, t.pose, outcome.pose->cast<double>()) /
+                    posed_diameter(model.points, t.pose);
     outcome.pose_correct = outcome.add_s < kAddSThreshold;
-    if (!points.symmetric(t.model))
+    if (!model.symmetric)
         outcome.rotation_error = rotation_error_degrees(t.pose, outcome.pose->cast<double>());
 }
 
@@ -216,11 +218,11 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
         options.segmentation.grouping == Grouping::kConvexity ? "convexity" : "euclidean";
     std::map<std::string, SceneTypeSummary> types;
     const std::optional<SceneTruth> truth = read_scene_truth(set.path);
-    std::optional<ModelPoints> model_points;
+    std::optional<TrueModels> true_models;
     std::set<std::pair<std::string, std::string>> held;  // (class, model name) of the database
     if (truth) {
         report.truth = truth->root;
-        model_points.emplace(truth->root);
+        true_models.emplace(truth->root);
         for (const ViewLabel& label : recognizer.classifier().labels())
             held.emplace(label.class_name, label.model_name);
     }
@@ -276,7 +278,7 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                 outcome.correct = o.outcome == SegmentOutcome::kFound &&
                                   !outcome.true_class.empty() &&
                                   outcome.predicted_class == outcome.true_class;
-                if (truth) judge_pose(*truth, *model_points, held, outcome);
+                if (truth) judge_pose(*truth, *true_models, held, outcome);
                 for (SceneTypeSummary* t : rows) {
                     ++t->objects;
                     t->found += o.outcome == SegmentOutcome::kFound;

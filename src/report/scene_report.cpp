@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -119,12 +120,11 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
              {"model", o.predicted_model.empty() ? nlohmann::json(nullptr)
                                                  : nlohmann::json(o.predicted_model)},
              {"pose", pose_or_null(o.pose)},
-             {"add_s", o.pose_judged && std::isfinite(o.add_s) ? nlohmann::json(o.add_s)
-                                                               : nlohmann::json(nullptr)},
+             {"add_s", o.pose_judged ? finite_or_null(o.add_s) : nlohmann::json(nullptr)},
              {"pose_judged", o.pose_judged},
              {"pose_correct", o.pose_correct},
-             {"rotation_error_deg",
-              o.rotation_error ? nlohmann::json(*o.rotation_error) : nlohmann::json(nullptr)}});
+             {"rotation_error_deg", finite_or_null(o.rotation_error.value_or(
+                                        std::numeric_limits<double>::quiet_NaN()))}});
     out["failures"] = nlohmann::json::array();
     for (const SceneFailure& f : report.failures)
         out["failures"].push_back({{"file", f.file}, {"error", f.error}});
