@@ -479,8 +479,8 @@ Points Recognizer::posed_surface(const Classification& c) const {
     return out;
 }
 
-void Recognizer::verify(Classification& c, const Observation& observation,
-                        const PriorFit* prior) const {
+void Recognizer::verify(Classification& c, const Observation& observation, const PriorFit* prior,
+                        std::vector<CandidateFit>* out_candidates) const {
     if (!verifies() || c.neighbours.empty()) return;
     const VerificationOptions& o = impl_->options.verification;
     // A model the database rescaled (not metric in its catalog) has a guessed size.
@@ -538,7 +538,7 @@ void Recognizer::verify(Classification& c, const Observation& observation,
             const int model = c.neighbours[i].model_id;
             // A candidate that cannot win is dropped as soon as that is sure (where no fit ends
             // the search early, which needs every fit whole).
-            const double must_beat = o.accept_score > 1.0
+            const double must_beat = o.accept_score > 1.0 && !out_candidates
                                          ? best_compared() + shape_term(model)
                                          : -std::numeric_limits<double>::infinity();
             picks.push_back(i);
@@ -548,6 +548,10 @@ void Recognizer::verify(Classification& c, const Observation& observation,
         }
     }
     if (picks.empty()) return;
+    if (out_candidates)
+        for (std::size_t j = 0; j < fits.size(); ++j)
+            out_candidates->push_back(
+                {picks[j], fits[j], shape_term(c.neighbours[picks[j]].model_id)});
     std::size_t best = 0;
     for (std::size_t j = 1; j < fits.size(); ++j)
         if (compared(j) > compared(best)) best = j;

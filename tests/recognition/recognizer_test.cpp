@@ -192,6 +192,42 @@ TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone)
 // models of their class), and the chosen fit of a model of known size is then fitted again at
 // that size: a mug 20 % larger than the model (the view scaled about the camera: the same
 // image, farther away) is named mug, and its pose is the model's rigid motion, scale 1.
+TEST_F(RecognizerTest, VerifyListsEveryCandidateItFittedAndChoosesTheBestCompared) {
+    // The fixture's two models: both are fitted (decide_class), each complete; the one named has
+    // the highest score less its shape term, and listing them changes nothing.
+    for (const auto& [shape, direction] : {std::pair{std::string("mug"), kHeldOut[0]},
+                                           std::pair{std::string("bowl"), kHeldOut[2]}}) {
+        const esf::Points view = held_out_view(shape, direction, 1);
+        const esf::Recognizer recognizer(db_path_);
+        const esf::QueryDescriptor d = recognizer.describe(view);
+        ASSERT_TRUE(d.ok()) << d.error;
+        const esf::Classification knn = recognizer.classify_descriptor(d.signatures);
+        esf::Classification plain = knn, listed = knn;
+        recognizer.verify(plain, esf::Observation{view, nullptr});
+        std::vector<esf::CandidateFit> candidates;
+        recognizer.verify(listed, esf::Observation{view, nullptr}, nullptr, &candidates);
+        ASSERT_EQ(candidates.size(), 2u) << shape;
+        EXPECT_NE(knn.neighbours[candidates[0].neighbour].model_name,
+                  knn.neighbours[candidates[1].neighbour].model_name);
+        std::size_t best = 0;
+        for (std::size_t j = 0; j < candidates.size(); ++j) {
+            EXPECT_FALSE(candidates[j].fit.abandoned);
+            EXPECT_GE(candidates[j].shape_term, 0.0);
+            const auto compared = [&](std::size_t i) {
+                return candidates[i].fit.fit.score() - candidates[i].shape_term;
+            };
+            if (compared(j) > compared(best)) best = j;
+        }
+        const esf::NeighbourView& chosen = knn.neighbours[candidates[best].neighbour];
+        EXPECT_EQ(listed.best_model, chosen.model_name) << shape;
+        EXPECT_EQ(listed.class_name, shape);
+        EXPECT_EQ(plain.best_model, listed.best_model);
+        ASSERT_TRUE(plain.fit && listed.fit);
+        EXPECT_DOUBLE_EQ(plain.fit->score(), listed.fit->score());
+        EXPECT_TRUE(plain.pose.isApprox(listed.pose));
+    }
+}
+
 TEST_F(RecognizerTest, EverySizeIsFreeWhileCandidatesCompeteAndThePoseIsMetric) {
     esf::Points view = held_out_view("mug", kHeldOut[1], 1);
     for (Eigen::Vector3f& p : view) p *= 1.2f;

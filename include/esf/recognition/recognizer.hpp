@@ -112,6 +112,14 @@ QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind);
 
 /// A model verified on the same object in an earlier frame (a track's last fit): verification
 /// fits it first, from where it stood (VerificationOptions::prior_tolerance).
+/// One candidate verification fitted (Recognizer::verify's `candidates`): its neighbour, its
+/// fit, and the shape term it competed with.
+struct CandidateFit {
+    std::size_t neighbour = 0;  ///< index into the classification's neighbours before reordering
+    PoseFit fit;
+    double shape_term = 0.0;
+};
+
 struct PriorFit {
     int model_id = -1;                                   ///< Classification::best_model_id
     Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();  ///< Classification::pose then
@@ -236,8 +244,11 @@ class Recognizer {
     /// prior's pose; verified with a score no more than verification.prior_tolerance below the
     /// prior's, it is the result and no other candidate is fitted (a track's object keeps its
     /// model while it fits: a third of the time); otherwise it joins the candidates.
-    void verify(Classification& c, const Observation& observation,
-                const PriorFit* prior = nullptr) const;
+    ///
+    /// With `candidates`, every candidate fitted is appended to it, each fit complete (none is
+    /// dropped early), for studies of the choice (bench/choice_study).
+    void verify(Classification& c, const Observation& observation, const PriorFit* prior = nullptr,
+                std::vector<CandidateFit>* candidates = nullptr) const;
     /// Verification is on and has the models' surfaces (stored or from verification_meshes).
     bool verifies() const;
     /// The surface samples of the model `c` names, placed where its fit put them (camera frame,
