@@ -39,12 +39,13 @@ void print_candidates(const esf::Recognizer& recognizer, const std::string& scen
         const esf::NeighbourView& n = knn.neighbours[f.neighbour];
         std::size_t votes = 0;
         for (const esf::NeighbourView& v : knn.neighbours) votes += v.class_name == n.class_name;
-        std::printf("%s,%u,%s,%s,%zu,%zu,%zu,%s,%s,%.5f,%.5f,%zu,%.4f,%.4f,%.4f,%.3f,%.4f,%.4f,%d,%d\n",
-                    scene.c_str(), object, true_class.c_str(), true_model.c_str(), points.size(),
-                    j, f.neighbour, n.class_name.c_str(), n.model_name.c_str(), n.distance,
-                    knn.neighbours.front().distance, votes, f.fit.fit.inliers, f.fit.fit.support,
-                    f.fit.fit.violations, f.fit.fit.rms_mm, f.fit.scale, f.shape_term,
-                    f.fit.verified ? 1 : 0, n.class_name == knn.class_name ? 1 : 0);
+        std::printf(
+            "%s,%u,%s,%s,%zu,%zu,%zu,%s,%s,%.5f,%.5f,%zu,%.4f,%.4f,%.4f,%.3f,%.4f,%.4f,%d,%d\n",
+            scene.c_str(), object, true_class.c_str(), true_model.c_str(), points.size(), j,
+            f.neighbour, n.class_name.c_str(), n.model_name.c_str(), n.distance,
+            knn.neighbours.front().distance, votes, f.fit.fit.inliers, f.fit.fit.support,
+            f.fit.fit.violations, f.fit.fit.rms_mm, f.fit.scale, f.shape_term,
+            f.fit.verified ? 1 : 0, n.class_name == knn.class_name ? 1 : 0);
     }
 }
 
