@@ -17,6 +17,17 @@ require_tools() {
     done
 }
 
+# Sets $work to the folder $1 (created when missing), or to a new temporary folder removed when
+# the script ends when $1 is empty.
+use_work_dir() {
+    work="$1"
+    if [[ -z "$work" ]]; then
+        work="$(mktemp -d)"
+        trap 'rm -rf "$work"' EXIT
+    fi
+    mkdir -p "$work"
+}
+
 # Stops with a message unless the folder $1 exists.
 require_data() {
     [[ -d "$1" ]] || { echo "$bench_name: no $1 (set ESF_DATA)" >&2; exit 1; }

@@ -23,12 +23,7 @@ folds="${3:-3}"
 seed="${4:-1}"
 require_tools "$esf"
 require_data "$data/meshes"
-work="${PROVING_GROUND_DIR:-}"
-if [[ -z "$work" ]]; then
-    work="$(mktemp -d)"
-    trap 'rm -rf "$work"' EXIT
-fi
-mkdir -p "$work"
+use_work_dir "${PROVING_GROUND_DIR:-}"
 eval_args="${PROVING_GROUND_EVAL:-}"
 size_spread="${PROVING_GROUND_SIZE_SPREAD:-0}"
 categories="${PROVING_GROUND_CATEGORIES:-}"

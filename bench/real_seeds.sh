@@ -17,12 +17,7 @@ seeds="${2:-0 1 2}"
 require_tools "$esf"
 require_data "$data/meshes"
 require_data "$data/real"
-work="${REAL_SEEDS_DIR:-}"
-if [[ -z "$work" ]]; then
-    work="$(mktemp -d)"
-    trap 'rm -rf "$work"' EXIT
-fi
-mkdir -p "$work"
+use_work_dir "${REAL_SEEDS_DIR:-}"
 read -r -a train_args <<< "${REAL_SEEDS_TRAIN:-}"
 read -r -a eval_args <<< "${REAL_SEEDS_EVAL:-}"
 for k in 0 1; do
