@@ -188,13 +188,10 @@ TEST_F(RecognizerTest, VerifiesWithTheStoredSurfacesAndSaysWhenADatabaseHasNone)
     fs::remove_all(dir);
 }
 
-// Every model's size is free while candidates compete (objects are larger or smaller than the
-// models of their class), and the chosen fit of a model of known size is then fitted again at
-// that size: a mug 20 % larger than the model (the view scaled about the camera: the same
-// image, farther away) is named mug, and its pose is the model's rigid motion, scale 1.
 TEST_F(RecognizerTest, VerifyListsEveryCandidateItFittedAndChoosesTheBestCompared) {
-    // The fixture's two models: both are fitted (decide_class), each complete; the one named has
-    // the highest score less its shape term, and listing them changes nothing.
+    // The fixture's two models (two classes, so the look-alike rule does not apply): both are
+    // fitted (decide_class), each complete; the one named has the highest score less its shape
+    // term, and listing them changes nothing.
     for (const auto& [shape, direction] : {std::pair{std::string("mug"), kHeldOut[0]},
                                            std::pair{std::string("bowl"), kHeldOut[2]}}) {
         const esf::Points view = held_out_view(shape, direction, 1);
@@ -228,6 +225,10 @@ TEST_F(RecognizerTest, VerifyListsEveryCandidateItFittedAndChoosesTheBestCompare
     }
 }
 
+// Every model's size is free while candidates compete (objects are larger or smaller than the
+// models of their class), and the chosen fit of a model of known size is then fitted again at
+// that size: a mug 20 % larger than the model (the view scaled about the camera: the same
+// image, farther away) is named mug, and its pose is the model's rigid motion, scale 1.
 TEST_F(RecognizerTest, EverySizeIsFreeWhileCandidatesCompeteAndThePoseIsMetric) {
     esf::Points view = held_out_view("mug", kHeldOut[1], 1);
     for (Eigen::Vector3f& p : view) p *= 1.2f;

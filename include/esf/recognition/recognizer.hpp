@@ -110,8 +110,6 @@ int descriptor_version(const std::string& name);
 /// out of range.
 QuerySetup query_setup(const Settings& settings, const DescriptorKind& kind);
 
-/// A model verified on the same object in an earlier frame (a track's last fit): verification
-/// fits it first, from where it stood (VerificationOptions::prior_tolerance).
 /// One candidate verification fitted (Recognizer::verify's `candidates`): its neighbour, its
 /// fit, and the shape term it competed with.
 struct CandidateFit {
@@ -120,6 +118,8 @@ struct CandidateFit {
     double shape_term = 0.0;
 };
 
+/// A model verified on the same object in an earlier frame (a track's last fit): verification
+/// fits it first, from where it stood (VerificationOptions::prior_tolerance).
 struct PriorFit {
     int model_id = -1;                                   ///< Classification::best_model_id
     Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();  ///< Classification::pose then
