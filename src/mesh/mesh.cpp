@@ -62,10 +62,30 @@ void check_mesh(const Mesh& mesh, const std::string& what) {
     }
 }
 
+namespace {
+
+// The first byte a binary little-endian PLY holds of x: its least significant byte.
+unsigned char first_byte(float x) {
+    return static_cast<unsigned char>(std::bit_cast<std::uint32_t>(x));
+}
+
+}  // namespace
+
 void write_ply_mesh(const std::string& path, const Mesh& mesh) {
     check_mesh(mesh, path);
+    // Assimp's PLY reader (5.2) takes a line feed right after end_header for the end of the
+    // header and reads every value one byte late: binary data must not start with 0x0A. That is
+    // x of the first vertex; another vertex goes first instead (its index swapped with 0), or,
+    // where every x would start so, each vertex leads with a zero byte (`uchar pad`, which
+    // readers leave alone).
+    std::size_t first = 0;
+    while (first < mesh.vertices.size() && first_byte(mesh.vertices[first].x()) == '\n') ++first;
+    const bool pad = first == mesh.vertices.size() && first > 0;
+    if (pad) first = 0;
+    const auto written = [first](std::size_t i) { return i == 0 ? first : i == first ? 0 : i; };
     std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by esf\n";
     header += "element vertex " + std::to_string(mesh.vertices.size()) + "\n";
+    if (pad) header += "property uchar pad\n";
     header += "property float x\nproperty float y\nproperty float z\n";
     header += "element face " + std::to_string(mesh.triangles.size()) + "\n";
     header += "property list uchar int vertex_indices\nend_header\n";
@@ -80,13 +100,15 @@ void write_ply_mesh(const std::string& path, const Mesh& mesh) {
             for (std::size_t i = size; i-- > 0;) bytes.push_back(from[i]);
         }
     };
-    for (const auto& v : mesh.vertices) {
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        const Eigen::Vector3f& v = mesh.vertices[written(i)];
+        if (pad) bytes.push_back('\0');
         for (int k = 0; k < 3; ++k) put(&v[k], sizeof(float));
     }
     for (const auto& t : mesh.triangles) {
         bytes.push_back(static_cast<char>(3));
         for (int k = 0; k < 3; ++k) {
-            const std::int32_t index = t[k];
+            const auto index = static_cast<std::int32_t>(written(static_cast<std::size_t>(t[k])));
             put(&index, sizeof(index));
         }
     }

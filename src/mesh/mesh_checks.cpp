@@ -156,6 +156,14 @@ void check_ply_header(const std::string& path, std::uintmax_t file_size) {
         elements.push_back(std::move(e));
     }
     if (!ended) throw IoError(file_message(path, 0, "PLY header has no end_header line"));
+    // Assimp 5.2 takes a line feed right after end_header for part of the header and reads every
+    // binary value one byte late (a mesh of garbage, or indices out of range).
+    if (binary && header.data_pos < start.size() && start[header.data_pos] == '\n')
+        throw IoError(file_message(
+            path, 0,
+            "binary PLY data starting with a line feed byte (0x0A), which the importer misreads "
+            "as the end of the header; write the mesh again (esf writes it another way) or as "
+            "ASCII PLY"));
     if (!known_sizes) return;
     const double available = static_cast<double>(file_size) - static_cast<double>(header_bytes);
     double need = 0.0;

@@ -203,6 +203,64 @@ TEST_F(MeshTest, PlyRoundTripIsExact) {
     EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
 }
 
+// Assimp's PLY reader takes a line feed right after end_header for part of the header, so binary
+// data may not start with 0x0A: x of the first vertex, whose lowest byte it is.
+float with_low_byte(float x, unsigned char byte) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &x, sizeof bits);
+    bits = (bits & ~std::uint32_t{0xff}) | byte;
+    std::memcpy(&x, &bits, sizeof x);
+    return x;
+}
+
+std::string first_data_bytes(const std::string& path, std::size_t n) {
+    std::ifstream in(path, std::ios::binary);
+    const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t end = all.find("end_header\n");
+    return end == std::string::npos ? std::string() : all.substr(end + 11, n);
+}
+
+TEST_F(MeshTest, PlyRoundTripWhereTheFirstValueStartsWithALineFeed) {
+    esf::Mesh mesh;
+    mesh.vertices = {{with_low_byte(0.1f, '\n'), -0.2f, 0.3f},
+                     {1e-7f, 2.5f, -3.25f},
+                     {-4.f, 5.f, 6.125f},
+                     {with_low_byte(0.5f, '\n'), 0.f, 1.f}};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {3, 1, 0}};
+    const std::string path = (dir_ / "line_feed.ply").string();
+    esf::write_ply_mesh(path, mesh);
+    EXPECT_NE(first_data_bytes(path, 1), "\n");
+    const esf::Mesh back = esf::load_mesh(path);
+    ASSERT_EQ(back.vertices.size(), mesh.vertices.size());
+    EXPECT_EQ(triangle_set(back), triangle_set(mesh));
+
+    // Every x starting so: each vertex leads with a zero byte, still exact.
+    for (Eigen::Vector3f& v : mesh.vertices) v.x() = with_low_byte(v.x(), '\n');
+    esf::write_ply_mesh(path, mesh);
+    EXPECT_EQ(first_data_bytes(path, 1), std::string(1, '\0'));
+    EXPECT_EQ(triangle_set(esf::load_mesh(path)), triangle_set(mesh));
+}
+
+TEST_F(MeshTest, BinaryPlyWhoseDataStartsWithALineFeedIsRefused) {
+    // The same bytes as esf wrote them before it avoided this: the importer would read them one
+    // byte late.
+    esf::Mesh mesh;
+    mesh.vertices = {{with_low_byte(0.1f, '\n'), 0.f, 0.f}, {1.f, 0.f, 0.f}, {0.f, 1.f, 0.f}};
+    mesh.triangles = {{0, 1, 2}};
+    std::string bytes =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 1\n"
+        "property list uchar int vertex_indices\nend_header\n";
+    for (const Eigen::Vector3f& v : mesh.vertices)
+        bytes.append(reinterpret_cast<const char*>(v.data()), 3 * sizeof(float));
+    bytes.push_back(3);
+    for (const int i : {0, 1, 2}) bytes.append(reinterpret_cast<const char*>(&i), sizeof i);
+    ASSERT_EQ(bytes[bytes.find("end_header\n") + 11], '\n');
+    const std::string path = write("line_feed.ply", bytes);
+    EXPECT_CONTAINS(error_of([&] { esf::load_mesh(path); }), "line feed");
+    EXPECT_THROW(esf::load_mesh(path), esf::IoError);
+}
+
 TEST_F(MeshTest, MinMaxCornerOfEmptyMeshThrows) {
     const esf::Mesh empty;
     EXPECT_THROW((void)empty.min_corner(), std::invalid_argument);
