@@ -53,8 +53,11 @@ Mesh load_mesh(const std::string& path);
 Mesh load_mesh(const std::string& path, const MeshImportLimits& limits);
 
 /// Writes a binary little-endian PLY (vertex x y z float, face vertex_indices); atomic (temporary
-/// file + rename). Throws std::invalid_argument when check_mesh() fails and esf::IoError naming
-/// the file when it cannot be written.
+/// file + rename). The data never starts with a line feed byte, which Assimp 5.2 reads as part of
+/// the header: where the first vertex's x would start so, another vertex is written first (the
+/// two indices swapped), or, where every x would, each vertex leads with a zero `uchar pad`. The
+/// geometry reads back exactly. Throws std::invalid_argument when check_mesh() fails and
+/// esf::IoError naming the file when it cannot be written.
 void write_ply_mesh(const std::string& path, const Mesh& mesh);
 
 }  // namespace esf
