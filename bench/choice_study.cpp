@@ -85,13 +85,9 @@ void study(const std::string& db_path, const std::string& csv, std::size_t candi
     for (const esf::LabelledScene& scene : set.scenes) {
         const esf::PointCloud cloud = esf::read_cloud(scene.file);
         const esf::SceneRecognition rec = pipeline.recognize(esf::segment_scene(cloud, {}), cloud);
-        // The frame verification reads, as recognize() makes it.
-        const esf::CameraIntrinsics& camera = options.verification.camera;
-        const bool framed = cloud.width == static_cast<std::uint32_t>(camera.width) &&
-                            cloud.height == static_cast<std::uint32_t>(camera.height);
-        std::optional<esf::PointCloud> image;
-        if (!framed && !cloud.organised()) image = esf::depth_image_of(cloud.points, camera);
-        const esf::PointCloud* frame = framed ? &cloud : image ? &*image : nullptr;
+        std::optional<esf::PointCloud> image;  // the frame verification reads
+        const esf::PointCloud* frame =
+            esf::verification_frame(cloud, options.verification.camera, image);
         std::vector<esf::Cluster> clusters;
         for (const auto& o : rec.objects) clusters.push_back(o.cluster);
         const esf::SegmentationScore score =

@@ -57,6 +57,9 @@ void study(const std::string& db_path, const std::string& csv) {
         for (const auto& o : r.objects) clusters.push_back(o.cluster);
         const esf::SegmentationScore score =
             esf::score_segmentation(cloud.points, cloud.labels, clusters, scheme);
+        std::optional<esf::PointCloud> image;  // the frame verification reads
+        const esf::PointCloud* frame =
+            esf::verification_frame(cloud, options.verification.camera, image);
         const std::string name = fs::path(scene.file).filename().string();
         for (const esf::SceneObjectLabel& label : scene.objects) {
             const esf::ObjectSegmentation* seg = nullptr;
@@ -88,7 +91,7 @@ void study(const std::string& db_path, const std::string& csv) {
             const esf::QueryDescriptor d = recognizer.describe(pair.cluster.points);
             if (!d.ok()) continue;
             pair.classification = recognizer.classify_descriptor(d.signatures);
-            recognizer.verify(pair.classification, esf::Observation{pair.cluster.points, &cloud});
+            recognizer.verify(pair.classification, esf::Observation{pair.cluster.points, frame});
             const auto na = static_cast<double>(a.cluster.points.size());
             const auto nb = static_cast<double>(b.cluster.points.size());
             const double pair_score = score_of(pair);

@@ -616,6 +616,18 @@ SceneRecognition Recognizer::recognize_unverified(SegmentationResult segmentatio
     return out;
 }
 
+const PointCloud* verification_frame(const PointCloud& scene, const CameraIntrinsics& camera,
+                                     std::optional<PointCloud>& image) {
+    // The frame is the free-space witness when it is what the camera model describes: its
+    // image, or a cloud that is that image's points.
+    if (scene.width == static_cast<std::uint32_t>(camera.width) &&
+        scene.height == static_cast<std::uint32_t>(camera.height))
+        return &scene;
+    image.reset();
+    if (!scene.organised()) image = depth_image_of(scene.points, camera);
+    return image ? &*image : nullptr;
+}
+
 SceneRecognition Recognizer::recognize_scene(const PointCloud& scene,
                                              const SegmentationOptions& options) const {
     return recognize(segment_scene(scene, options), scene);
@@ -634,14 +646,9 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
                                     std::to_string(segmentation.clusters.size()) + " clusters");
     SceneRecognition out = recognize_unverified(std::move(segmentation));
     if (verifies()) {
-        // The frame is the free-space witness when it is what the camera model describes: its
-        // image, or a cloud that is that image's points (depth_image_of).
-        const CameraIntrinsics& camera = impl_->options.verification.camera;
-        const bool framed = scene.width == static_cast<std::uint32_t>(camera.width) &&
-                            scene.height == static_cast<std::uint32_t>(camera.height);
         std::optional<PointCloud> image;
-        if (!framed && !scene.organised()) image = depth_image_of(scene.points, camera);
-        const PointCloud* frame = framed ? &scene : image ? &*image : nullptr;
+        const PointCloud* frame =
+            verification_frame(scene, impl_->options.verification.camera, image);
         verify_objects(out, frame, priors);
         if (frame && impl_->options.merge_parts && out.plane_found) merge_parts(out, *frame);
     }

@@ -181,6 +181,13 @@ struct SceneRecognition {
     std::vector<RecognizedObject> objects;
 };
 
+/// The frame verification checks a scene's hypotheses against (free space, outlines): `scene`
+/// itself when it is the camera's image (camera.width x camera.height), else, for an unorganised
+/// cloud whose points each lie on their own pixel, that image, made into `image`
+/// (depth_image_of); otherwise none (nullptr). Recognizer::recognize() uses it.
+const PointCloud* verification_frame(const PointCloud& scene, const CameraIntrinsics& camera,
+                                     std::optional<PointCloud>& image);
+
 class Recognizer {
   public:
     /// Opens the database read-only, loads its descriptors and weights and builds the index.
