@@ -132,6 +132,47 @@ TEST_F(RecognizerTest, PartsThatOneModelFitsBetterBecomeOneObject) {
     }
 }
 
+TEST(VerificationFrame, TheImageItselfItsPointsAsTheImageOrNone) {
+    const esf::CameraIntrinsics camera = esf::CameraIntrinsics::kinect();
+    const std::size_t w = static_cast<std::size_t>(camera.width);
+    const std::size_t h = static_cast<std::size_t>(camera.height);
+    // The camera's own image: used as it is.
+    esf::PointCloud image;
+    image.width = static_cast<std::uint32_t>(w);
+    image.height = static_cast<std::uint32_t>(h);
+    image.points.assign(w * h, Eigen::Vector3f::Constant(std::nanf("")));
+    for (std::size_t v = 100; v < 120; ++v)
+        for (std::size_t u = 200; u < 220; ++u) {
+            const float z = 1.0f;
+            image.points[v * w + u] = {
+                static_cast<float>((static_cast<double>(u) - camera.cx) / camera.fx) * z,
+                static_cast<float>((static_cast<double>(v) - camera.cy) / camera.fy) * z, z};
+        }
+    std::optional<esf::PointCloud> made;
+    EXPECT_EQ(esf::verification_frame(image, camera, made), &image);
+    EXPECT_FALSE(made.has_value());
+    // Its finite points alone: made into that image again.
+    esf::PointCloud finite;
+    for (const Eigen::Vector3f& p : image.points)
+        if (std::isfinite(p.z())) finite.points.push_back(p);
+    finite.width = static_cast<std::uint32_t>(finite.points.size());
+    finite.height = 1;
+    const esf::PointCloud* frame = esf::verification_frame(finite, camera, made);
+    ASSERT_NE(frame, nullptr);
+    ASSERT_TRUE(made.has_value());
+    EXPECT_EQ(frame, &*made);
+    EXPECT_EQ(frame->width, image.width);
+    EXPECT_EQ(frame->height, image.height);
+    EXPECT_TRUE(frame->points[110 * w + 210].isApprox(image.points[110 * w + 210], 1e-5f));
+    // An organised cloud of another size: no frame.
+    esf::PointCloud small;
+    small.width = 4;
+    small.height = 2;
+    small.points.assign(8, Eigen::Vector3f(0.0f, 0.0f, 1.0f));
+    EXPECT_EQ(esf::verification_frame(small, camera, made), nullptr);
+    EXPECT_FALSE(made.has_value());
+}
+
 /// A 1 m x 1 m table at z = 1 (camera frame, facing the camera) sampled every 5 mm.
 esf::Points table_points() {
     esf::Points table;
