@@ -1,0 +1,122 @@
+#!/usr/bin/env bash
+# Every judge of docs/judging.md for one setting, in one command. Trains a database of all shared
+# meshes and the proving grounds' three fold databases with the setting's training options,
+# makes the judges' scene sets (once: they are kept in the work folder and reused), evaluates
+# each judge with the setting's evaluation options and prints one line per judge.
+#   bench/judges.sh [BUILD_DIR]
+# Environment:
+#   JUDGES_DIR    work folder (default: a new temporary folder, removed at the end). Scene sets
+#                 and databases already there are reused, so a second setting costs only its own
+#                 training (about a minute on 2 cores) and evaluation (under a minute).
+#   JUDGES_NAME   the setting's name: its databases and reports go to JUDGES_DIR/NAME (default:
+#                 "default"); compare two settings' reports with bench/scenes_paired.py.
+#   JUDGES_TRAIN  extra `esf train` options (e.g. "--angles-weight 1.4" or "--seed 1")
+#   JUDGES_EVAL   extra `esf eval` options (e.g. "--shape-weight 0.5")
+# The scene sets are those of BENCHMARKS.md: proving ground (3 folds of 100 tables of held-out
+# catalog groups, seed 1), sized proving ground (the same with --size-spread 0.25), household
+# proving ground (--categories of the real scenes), the shared real scenes in two folds, the 229
+# real views, and the pose sets (70 tables of models the database holds, seeds 6 and 5).
+set -euo pipefail
+bench_name=judges
+source "$(dirname "$0")/bench_env.sh"
+require_tools "$esf"
+require_data "$data/meshes"
+require_data "$data/real/scenes"
+use_work_dir "${JUDGES_DIR:-}"
+name="${JUDGES_NAME:-default}"
+[[ "$name" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "judges: JUDGES_NAME '$name' is not a plain name" >&2; exit 1; }
+read -r -a train_args <<< "${JUDGES_TRAIN:-}"
+read -r -a eval_args <<< "${JUDGES_EVAL:-}"
+meshes="$data/meshes"
+household=box,can,bowl,mug,bottle,cup
+mkdir -p "$work/$name"
+
+# The scene sets, each made once (a set is complete when its generate.json exists).
+generate() {  # FOLDER [esf generate-scenes options...]
+    local folder="$1"
+    shift
+    [[ -f "$work/sets/$folder/generate.json" ]] && return
+    echo "== scene set $folder" >&2
+    "$esf" generate-scenes "$meshes" -o "$work/sets/$folder" "$@" --json > "$work/sets/$folder.json"
+    mv "$work/sets/$folder.json" "$work/sets/$folder/generate.json"
+}
+mkdir -p "$work/sets"
+for k in 0 1 2; do
+    generate "ground$k" -n 100 --seed 1 --fold "$k/3"
+    generate "sized$k" -n 100 --seed 1 --fold "$k/3" --size-spread 0.25
+    generate "household$k" -n 100 --seed 1 --fold "$k/3" --categories "$household"
+done
+generate poseB -n 70 --seed 6
+generate pose -n 70 --seed 5
+for k in 0 1; do
+    [[ -f "$work/sets/real$k.csv" ]] ||
+        "$root/scripts/mosd-scene-set.sh" --fold "$k/2" "$data" > "$work/sets/real$k.csv"
+done
+
+# The setting's databases.
+train() {  # DB [esf train options...]
+    local db="$1"
+    shift
+    [[ -f "$db.json" ]] && return
+    echo "== train $db" >&2
+    "$esf" train "$meshes" -o "$db" "${train_args[@]}" "$@" --json > "$db.part.json"
+    mv "$db.part.json" "$db.json"
+}
+train "$work/$name/all.sqlite"
+for k in 0 1 2; do train "$work/$name/fold$k.sqlite" --other-folds "$k/3"; done
+
+# The evaluations, two at a time.
+evaluate() {  # REPORT DB TEST [esf eval options...]
+    local report="$1" db="$2" test="$3"
+    shift 3
+    "$esf" eval "$db" "$test" "$@" "${eval_args[@]}" --json > "$work/$name/$report.json"
+}
+echo "== evaluate $name" >&2
+jobs_running() { while (($(jobs -rp | wc -l) >= 2)); do wait -n; done; }
+for k in 0 1 2; do
+    for set in ground sized household; do
+        jobs_running
+        evaluate "$set$k" "$work/$name/fold$k.sqlite" --scenes "$work/sets/$set$k/scenes.csv" &
+    done
+done
+for k in 0 1; do
+    jobs_running
+    evaluate "real$k" "$work/$name/all.sqlite" --scenes "$work/sets/real$k.csv" &
+done
+for set in poseB pose; do
+    jobs_running
+    evaluate "$set" "$work/$name/all.sqlite" --scenes "$work/sets/$set/scenes.csv" &
+done
+jobs_running
+evaluate views "$work/$name/all.sqlite" "$data/real/labels.csv" &
+wait
+
+python3 - "$work/$name" "$name" <<'PY'
+import json, sys
+folder, name = sys.argv[1], sys.argv[2]
+def scenes(*reports):
+    found = right = objects = posed = judged = 0
+    for r in reports:
+        a = next(t for t in json.load(open(f"{folder}/{r}.json"))["types"] if t["type"] == "all")
+        found += a["found"]; right += a["correct"]; objects += a["objects"]
+        posed += a.get("pose_correct") or 0; judged += a.get("posed") or 0
+    return found, right, objects, posed, judged
+rows = [
+    ("proving ground", "choosing", scenes("ground0", "ground1", "ground2")),
+    ("sized proving ground", "choosing", scenes("sized0", "sized1", "sized2")),
+    ("real fold 0", "choosing", scenes("real0")),
+    ("pose set B", "choosing (pose)", scenes("poseB")),
+    ("household proving ground", "reporting", scenes("household0", "household1", "household2")),
+    ("real fold 1", "reporting", scenes("real1")),
+    ("pose set", "reporting (pose)", scenes("pose")),
+]
+print(f"judges of the setting '{name}' (reports in {folder})")
+print(f"| judge | role | objects | found | named right | ADD-S < 0.1 d |")
+print(f"|---|---|---|---|---|---|")
+for judge, role, (found, right, objects, posed, judged) in rows:
+    pose = f"{posed} of {judged}" if judged else ""
+    print(f"| {judge} | {role} | {objects} | {found} | {right} | {pose} |")
+views = json.load(open(f"{folder}/views.json"))["overall"]
+print(f"| real views | reporting | {views['samples']} | | {views['top1_hits']} (10-NN "
+      f"{views['topk_hits']}) | |")
+PY
