@@ -12,6 +12,8 @@
 #                 "default"); compare two settings' reports with bench/scenes_paired.py.
 #   JUDGES_TRAIN  extra `esf train` options (e.g. "--angles-weight 1.4" or "--seed 1")
 #   JUDGES_EVAL   extra `esf eval` options (e.g. "--shape-weight 0.5")
+#   JUDGES_FROM   evaluate the databases of that earlier setting (a name in JUDGES_DIR) instead
+#                 of training (for settings of `esf eval` alone; JUDGES_TRAIN is then refused)
 # The scene sets are those of BENCHMARKS.md: proving ground (3 folds of 100 tables of held-out
 # catalog groups, seed 1), sized proving ground (the same with --size-spread 0.25), household
 # proving ground (--categories of the real scenes), the shared real scenes in two folds, the 229
@@ -29,7 +31,6 @@ read -r -a train_args <<< "${JUDGES_TRAIN:-}"
 read -r -a eval_args <<< "${JUDGES_EVAL:-}"
 meshes="$data/meshes"
 household=box,can,bowl,mug,bottle,cup
-mkdir -p "$work/$name"
 
 # The scene sets, each made once (a set is complete when its generate.json exists).
 generate() {  # FOLDER [esf generate-scenes options...]
@@ -53,7 +54,17 @@ for k in 0 1; do
         "$root/scripts/mosd-scene-set.sh" --fold "$k/2" "$data" > "$work/sets/real$k.csv"
 done
 
-# The setting's databases.
+# The setting's databases: trained, or an earlier setting's.
+databases="$work/$name"
+if [[ -n "${JUDGES_FROM:-}" ]]; then
+    databases="$work/$JUDGES_FROM"
+    ((${#train_args[@]} == 0)) || { echo "judges: JUDGES_FROM and JUDGES_TRAIN together" >&2; exit 1; }
+    for db in all fold0 fold1 fold2; do
+        [[ -f "$databases/$db.sqlite.json" ]] ||
+            { echo "judges: no trained $databases/$db.sqlite (JUDGES_FROM)" >&2; exit 1; }
+    done
+fi
+mkdir -p "$work/$name"
 train() {  # DB [esf train options...]
     local db="$1"
     shift
@@ -62,8 +73,8 @@ train() {  # DB [esf train options...]
     "$esf" train "$meshes" -o "$db" "${train_args[@]}" "$@" --json > "$db.part.json"
     mv "$db.part.json" "$db.json"
 }
-train "$work/$name/all.sqlite"
-for k in 0 1 2; do train "$work/$name/fold$k.sqlite" --other-folds "$k/3"; done
+train "$databases/all.sqlite"
+for k in 0 1 2; do train "$databases/fold$k.sqlite" --other-folds "$k/3"; done
 
 # The evaluations, two at a time.
 evaluate() {  # REPORT DB TEST [esf eval options...]
@@ -76,19 +87,19 @@ jobs_running() { while (($(jobs -rp | wc -l) >= 2)); do wait -n; done; }
 for k in 0 1 2; do
     for set in ground sized household; do
         jobs_running
-        evaluate "$set$k" "$work/$name/fold$k.sqlite" --scenes "$work/sets/$set$k/scenes.csv" &
+        evaluate "$set$k" "$databases/fold$k.sqlite" --scenes "$work/sets/$set$k/scenes.csv" &
     done
 done
 for k in 0 1; do
     jobs_running
-    evaluate "real$k" "$work/$name/all.sqlite" --scenes "$work/sets/real$k.csv" &
+    evaluate "real$k" "$databases/all.sqlite" --scenes "$work/sets/real$k.csv" &
 done
 for set in poseB pose; do
     jobs_running
-    evaluate "$set" "$work/$name/all.sqlite" --scenes "$work/sets/$set/scenes.csv" &
+    evaluate "$set" "$databases/all.sqlite" --scenes "$work/sets/$set/scenes.csv" &
 done
 jobs_running
-evaluate views "$work/$name/all.sqlite" "$data/real/labels.csv" &
+evaluate views "$databases/all.sqlite" "$data/real/labels.csv" &
 wait
 
 python3 - "$work/$name" "$name" <<'PY'
