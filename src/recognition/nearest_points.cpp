@@ -150,15 +150,15 @@ bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_square
         for (int a = 0; a < 3; ++a)
             at[a] = (static_cast<double>(q[a]) - origin_[a]) * static_cast<double>(inverse_cell_);
         // The query's own cell first: a near point there narrows the cells read after.
+        long own[3] = {-1, -1, -1};  // none when the query lies outside the grid
         if (at[0] >= 0.0 && at[1] >= 0.0 && at[2] >= 0.0 && at[0] < cells_[0] &&
             at[1] < cells_[1] && at[2] < cells_[2]) {
-            const auto own = [&](int a) { return static_cast<long>(at[a]); };  // the floor here
+            for (int a = 0; a < 3; ++a) own[a] = static_cast<long>(at[a]);  // the floor here
             const auto cell =
-                static_cast<std::size_t>((own(2) * cells_[1] + own(1)) * cells_[0] + own(0));
+                static_cast<std::size_t>((own[2] * cells_[1] + own[1]) * cells_[0] + own[0]);
             scan(cell_start_[cell], cell_start_[cell + 1]);
         }
-        // Then every row of cells within the reach left (the own cell's points are read again,
-        // and cannot be strictly nearer the second time).
+        // Then every row of cells within the reach left, but the own cell (read already).
         const double reach = std::sqrt(static_cast<double>(best)) * (1.0 + kReachSlack) *
                              static_cast<double>(inverse_cell_);
         long first[3], last[3];
@@ -173,11 +173,19 @@ bool NearestPoints::nearest_within(const Eigen::Vector3f& q, float radius_square
         }
         if (!misses) {
             const long nx = cells_[0], ny = cells_[1];
+            const auto cells = [&](long from, long to) {  // the row's cells [from, to)
+                scan(cell_start_[static_cast<std::size_t>(from)],
+                     cell_start_[static_cast<std::size_t>(to)]);
+            };
             for (long z = first[2]; z <= last[2]; ++z)
                 for (long y = first[1]; y <= last[1]; ++y) {
                     const long row = (z * ny + y) * nx;
-                    scan(cell_start_[static_cast<std::size_t>(row + first[0])],
-                         cell_start_[static_cast<std::size_t>(row + last[0] + 1)]);
+                    if (z == own[2] && y == own[1]) {
+                        cells(row + first[0], row + own[0]);
+                        cells(row + own[0] + 1, row + last[0] + 1);
+                    } else {
+                        cells(row + first[0], row + last[0] + 1);
+                    }
                 }
         }
     }
