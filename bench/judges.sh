@@ -2,7 +2,7 @@
 # Every judge of docs/judging.md for one setting, in one command. Trains a database of all shared
 # meshes and the proving grounds' three fold databases with the setting's training options,
 # makes the judges' scene sets (once: they are kept in the work folder and reused), evaluates
-# each judge with the setting's evaluation options and prints one line per judge.
+# each judge with the setting's evaluation options and prints one row per judge.
 #   bench/judges.sh [BUILD_DIR]
 # Environment:
 #   JUDGES_DIR    work folder (default: a new temporary folder, removed at the end). Scene sets
@@ -57,6 +57,8 @@ done
 # The setting's databases: trained, or an earlier setting's.
 databases="$work/$name"
 if [[ -n "${JUDGES_FROM:-}" ]]; then
+    [[ "$JUDGES_FROM" =~ ^[A-Za-z0-9._-]+$ ]] ||
+        { echo "judges: JUDGES_FROM '$JUDGES_FROM' is not a plain name" >&2; exit 1; }
     databases="$work/$JUDGES_FROM"
     ((${#train_args[@]} == 0)) || { echo "judges: JUDGES_FROM and JUDGES_TRAIN together" >&2; exit 1; }
     for db in all fold0 fold1 fold2; do
@@ -76,31 +78,30 @@ train() {  # DB [esf train options...]
 train "$databases/all.sqlite"
 for k in 0 1 2; do train "$databases/fold$k.sqlite" --other-folds "$k/3"; done
 
-# The evaluations, two at a time.
+# The evaluations, two at a time; a failed one stops the script with its status.
+pids=()
 evaluate() {  # REPORT DB TEST [esf eval options...]
     local report="$1" db="$2" test="$3"
     shift 3
-    "$esf" eval "$db" "$test" "$@" "${eval_args[@]}" --json > "$work/$name/$report.json"
+    if ((${#pids[@]} >= 2)); then
+        wait "${pids[0]}"
+        pids=("${pids[@]:1}")
+    fi
+    "$esf" eval "$db" "$test" "$@" "${eval_args[@]}" --json > "$work/$name/$report.json" &
+    pids+=("$!")
 }
 echo "== evaluate $name" >&2
-jobs_running() { while (($(jobs -rp | wc -l) >= 2)); do wait -n; done; }
 for k in 0 1 2; do
     for set in ground sized household; do
-        jobs_running
-        evaluate "$set$k" "$databases/fold$k.sqlite" --scenes "$work/sets/$set$k/scenes.csv" &
+        evaluate "$set$k" "$databases/fold$k.sqlite" --scenes "$work/sets/$set$k/scenes.csv"
     done
 done
-for k in 0 1; do
-    jobs_running
-    evaluate "real$k" "$databases/all.sqlite" --scenes "$work/sets/real$k.csv" &
-done
+for k in 0 1; do evaluate "real$k" "$databases/all.sqlite" --scenes "$work/sets/real$k.csv"; done
 for set in poseB pose; do
-    jobs_running
-    evaluate "$set" "$databases/all.sqlite" --scenes "$work/sets/$set/scenes.csv" &
+    evaluate "$set" "$databases/all.sqlite" --scenes "$work/sets/$set/scenes.csv"
 done
-jobs_running
-evaluate views "$databases/all.sqlite" "$data/real/labels.csv" &
-wait
+evaluate views "$databases/all.sqlite" "$data/real/labels.csv"
+for pid in "${pids[@]}"; do wait "$pid"; done
 
 python3 - "$work/$name" "$name" <<'PY'
 import json, sys
