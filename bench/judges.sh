@@ -14,6 +14,8 @@
 #   JUDGES_EVAL   extra `esf eval` options (e.g. "--shape-weight 0.5")
 #   JUDGES_FROM   evaluate the databases of that earlier setting (a name in JUDGES_DIR) instead
 #                 of training (for settings of `esf eval` alone; JUDGES_TRAIN is then refused)
+#   JUDGES_BASE   an earlier judged setting (a name in JUDGES_DIR): each figure is followed by its
+#                 change against that setting's, in brackets
 # The scene sets are those of BENCHMARKS.md: proving ground (3 folds of 100 tables of held-out
 # catalog groups, seed 1), sized proving ground (the same with --size-spread 0.25), household
 # proving ground (--categories of the real scenes), the shared real scenes in two folds, the 229
@@ -31,6 +33,13 @@ read -r -a train_args <<< "${JUDGES_TRAIN:-}"
 read -r -a eval_args <<< "${JUDGES_EVAL:-}"
 meshes="$data/meshes"
 household=box,can,bowl,mug,bottle,cup
+
+base=""  # JUDGES_BASE's reports
+if [[ -n "${JUDGES_BASE:-}" ]]; then
+    [[ "$JUDGES_BASE" =~ ^[A-Za-z0-9._-]+$ && -f "$work/$JUDGES_BASE/views.json" ]] ||
+        { echo "judges: JUDGES_BASE '$JUDGES_BASE' is no judged setting in $work" >&2; exit 1; }
+    base="$work/$JUDGES_BASE"
+fi
 
 # The scene sets, each made once (a set is complete when its generate.json exists).
 generate() {  # FOLDER [esf generate-scenes options...]
@@ -103,32 +112,42 @@ done
 evaluate views "$databases/all.sqlite" "$data/real/labels.csv"
 for pid in "${pids[@]}"; do wait "$pid"; done
 
-python3 - "$work/$name" "$name" <<'PY'
+python3 - "$work/$name" "$name" "$base" <<'PY'
 import json, sys
-folder, name = sys.argv[1], sys.argv[2]
-def scenes(*reports):
-    found = right = objects = posed = judged = 0
-    for r in reports:
-        a = next(t for t in json.load(open(f"{folder}/{r}.json"))["types"] if t["type"] == "all")
-        found += a["found"]; right += a["correct"]; objects += a["objects"]
-        posed += a.get("pose_correct") or 0; judged += a.get("posed") or 0
-    return found, right, objects, posed, judged
-rows = [
-    ("proving ground", "choosing", scenes("ground0", "ground1", "ground2")),
-    ("sized proving ground", "choosing", scenes("sized0", "sized1", "sized2")),
-    ("real fold 0", "choosing", scenes("real0")),
-    ("pose set B", "choosing (pose)", scenes("poseB")),
-    ("household proving ground", "reporting", scenes("household0", "household1", "household2")),
-    ("real fold 1", "reporting", scenes("real1")),
-    ("pose set", "reporting (pose)", scenes("pose")),
+folder, name, base = sys.argv[1], sys.argv[2], sys.argv[3]
+JUDGES = [  # judge, role, reports
+    ("proving ground", "choosing", ["ground0", "ground1", "ground2"]),
+    ("sized proving ground", "choosing", ["sized0", "sized1", "sized2"]),
+    ("real fold 0", "choosing", ["real0"]),
+    ("pose set B", "choosing (pose)", ["poseB"]),
+    ("household proving ground", "reporting", ["household0", "household1", "household2"]),
+    ("real fold 1", "reporting", ["real1"]),
+    ("pose set", "reporting (pose)", ["pose"]),
 ]
-print(f"judges of the setting '{name}' (reports in {folder})")
-print(f"| judge | role | objects | found | named right | ADD-S < 0.1 d |")
-print(f"|---|---|---|---|---|---|")
-for judge, role, (found, right, objects, posed, judged) in rows:
-    pose = f"{posed} of {judged}" if judged else ""
-    print(f"| {judge} | {role} | {objects} | {found} | {right} | {pose} |")
-views = json.load(open(f"{folder}/views.json"))["overall"]
-print(f"| real views | reporting | {views['samples']} | | {views['top1_hits']} (10-NN "
-      f"{views['topk_hits']}) | |")
+def scenes(where, reports):  # objects, found, named right, ADD-S right, ADD-S judged
+    total = [0, 0, 0, 0, 0]
+    for r in reports:
+        a = next(t for t in json.load(open(f"{where}/{r}.json"))["types"] if t["type"] == "all")
+        for i, key in enumerate(("objects", "found", "correct", "pose_correct", "posed")):
+            total[i] += a.get(key) or 0
+    return total
+def views(where):
+    v = json.load(open(f"{where}/views.json"))["overall"]
+    return [v["samples"], 0, v["top1_hits"], v["topk_hits"], 0]
+def change(now, then):
+    return f" ({now - then:+d})" if base else ""
+print(f"judges of the setting '{name}' (reports in {folder})"
+      + (f", changes against {base}" if base else ""))
+print("| judge | role | objects | found | named right | ADD-S < 0.1 d |")
+print("|---|---|---|---|---|---|")
+for judge, role, reports in JUDGES + [("real views", "reporting", None)]:
+    now = scenes(folder, reports) if reports else views(folder)
+    then = (scenes(base, reports) if reports else views(base)) if base else now
+    objects, found, right, posed, judged = now
+    if reports is None:  # 1-NN, and 10-NN in brackets
+        cells = ["", f"{right}{change(right, then[2])} (10-NN {now[3]}{change(now[3], then[3])})"]
+    else:
+        cells = [f"{found}{change(found, then[1])}", f"{right}{change(right, then[2])}"]
+    pose = f"{posed}{change(posed, then[3])} of {judged}" if judged else ""
+    print(f"| {judge} | {role} | {objects} | {cells[0]} | {cells[1]} | {pose} |")
 PY
