@@ -105,7 +105,10 @@ void add_generate_command(CLI::App& app) {
         "DIR/<category>/gen_<category>_NNN.ply (binary PLY, metres, +z up, watertight).\n"
         "Categories: " +
             known +
-            ".\n"
+            ";\n"
+            "and, only when named, can: wide tins (12-22 cm across, closed, rounded rims, half\n"
+            "with a lid), the cans that scanned can sets lack, to add to a database of scans\n"
+            "(`esf train DIR -o DB` on a database of ../shared/data/meshes adds them).\n"
             "Model i of a category depends only on (seed, category, i): --per-class 5 gives the\n"
             "first 5 models of --per-class 10, whatever the thread count. Train on them with\n"
             "`esf train DIR -o DB`.");
@@ -116,7 +119,7 @@ void add_generate_command(CLI::App& app) {
         ->check(CLI::Range(1, 100000));
     add_seed_option(*cmd, args->seed, "Random seed");
     cmd->add_option("--categories", args->categories,
-                    "Comma-separated subset of the categories (default: all)")
+                    "Comma-separated categories (default: the paper's ten; `can` only when named)")
         ->delimiter(',');
     add_threads_option(*cmd, args->threads);
     cmd->add_flag("--json", args->json,

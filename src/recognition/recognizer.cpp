@@ -655,11 +655,38 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
     return out;
 }
 
+namespace {
+
+// The pixels an object's points fall on lie within this box (inclusive; empty when lo > hi).
+struct PixelBox {
+    long u_lo = std::numeric_limits<long>::max(), v_lo = std::numeric_limits<long>::max();
+    long u_hi = std::numeric_limits<long>::min(), v_hi = std::numeric_limits<long>::min();
+    void add(long u, long v) {
+        u_lo = std::min(u_lo, u);
+        v_lo = std::min(v_lo, v);
+        u_hi = std::max(u_hi, u);
+        v_hi = std::max(v_hi, v);
+    }
+    bool empty() const { return u_lo > u_hi; }
+    PixelBox grown(long by) const {
+        return empty() ? *this : PixelBox{u_lo - by, v_lo - by, u_hi + by, v_hi + by};
+    }
+    bool holds(long u, long v) const { return u >= u_lo && u <= u_hi && v >= v_lo && v <= v_hi; }
+    bool meets(const PixelBox& o) const {
+        return !empty() && !o.empty() && u_lo <= o.u_hi && o.u_lo <= u_hi && v_lo <= o.v_hi &&
+               o.v_lo <= v_hi;
+    }
+};
+
+}  // namespace
+
 void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) const {
     // Parts meet where a pixel of one, up to 6 pixels on along its row or column from a pixel of
     // the other, is within this of it (a thin stem or handle between them may be lost).
     constexpr float kContactDistance = 0.03f;
     constexpr std::size_t kMinContacts = 5;
+    constexpr std::array<long, 4> kSteps = {1, 2, 4, 6};  // pixels along a row or column
+    constexpr long kReach = kSteps.back();
     const CameraIntrinsics& camera = impl_->options.verification.camera;
     std::vector<RecognizedObject>& objects = scene.objects;
     // Stable names of the objects, so that a pair found wanting is not fitted again.
@@ -724,16 +751,31 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         // from the new object's pixel, or from the older one's pixel before it.
         std::map<std::pair<int, int>, std::size_t> contacts;
         const bool older = std::find(fresh.begin(), fresh.end(), false) != fresh.end();
+        // A pixel meets another object only within kReach pixels of that object's box, so each
+        // fresh object reads only its pixels near the boxes of the objects it may meet.
+        std::vector<PixelBox> boxes(objects.size());
+        for (std::size_t i = 0; i < objects.size(); ++i)
+            for (const std::uint32_t pixel : pixels[i])
+                if (pixel != kNoPixel) boxes[i].add(pixel % width, pixel / width);
+        std::vector<PixelBox> near;
         for (std::size_t i = 0; i < objects.size(); ++i) {
             if (!fresh[i]) continue;
             const int a = static_cast<int>(i);
+            near.clear();
+            for (std::size_t j = 0; j < objects.size(); ++j)
+                if (j != i && boxes[j].grown(kReach).meets(boxes[i]))
+                    near.push_back(boxes[j].grown(kReach));
+            if (near.empty()) continue;
             for (std::size_t k = 0; k < pixels[i].size(); ++k) {
                 const std::uint32_t pixel = pixels[i][k];
                 // Once a pixel: where its last point, which owns it, lies.
                 if (pixel == kNoPixel || seen[pixel] != &objects[i].cluster.points[k]) continue;
                 const auto u = static_cast<long>(pixel) % width;
                 const auto v = static_cast<long>(pixel) / width;
-                for (const long step : {1L, 2L, 4L, 6L})
+                if (std::none_of(near.begin(), near.end(),
+                                 [&](const PixelBox& box) { return box.holds(u, v); }))
+                    continue;
+                for (const long step : kSteps)
                     for (const auto& [du, dv] : {std::pair{step, 0L}, std::pair{0L, step}}) {
                         if (u + du < width && v + dv < height) {
                             const auto other = static_cast<std::size_t>((v + dv) * width + u + du);

@@ -314,6 +314,37 @@ Surface make_bowl(Rng& rng) {
     return revolve(p, kRevolveSegments);
 }
 
+// ---- can: a wide tin (cookie, biscuit or paint tin), a closed cylinder with rounded rims and,
+// on half of them, a lid whose lip stands out from the body. Radius 6-11 cm (log-uniform),
+// height 0.3-1 times the diameter: the wide tins that scanned can sets lack (their cans are
+// at most 10 cm across); narrow cans are left to the scans.
+
+Surface make_can(Rng& rng) {
+    const double radius = std::exp(rng.uniform(std::log(0.060), std::log(0.110)));
+    const double height = 2.0 * radius * rng.uniform(0.30, 1.00);
+    const double round = std::min({0.08 * radius, 0.004, 0.25 * height});
+    const bool lid = rng.chance(0.5);
+    const double lip = lid ? rng.uniform(0.001, 0.0025) : 0.0;  // the lid's overhang
+    const double lid_h = lid ? std::min(0.3 * height, rng.uniform(0.010, 0.020)) : 0.0;
+
+    Path2 p;
+    extend(p, segment({0.0, 0.0}, {radius - round, 0.0}, 8));
+    extend(p, arc({radius - round, round}, round, -0.5 * kPi, 0.0, 5));
+    if (lid) {
+        const double body_top = height - lid_h;
+        extend(p, segment({radius, round}, {radius, body_top}, 10));
+        extend(p, segment({radius, body_top}, {radius + lip, body_top}, 2));
+        extend(p, segment({radius + lip, body_top}, {radius + lip, height - round}, 4));
+        extend(p, arc({radius + lip - round, height - round}, round, 0.0, 0.5 * kPi, 5));
+        extend(p, segment({radius + lip - round, height}, {0.0, height}, 8));
+    } else {
+        extend(p, segment({radius, round}, {radius, height - round}, 12));
+        extend(p, arc({radius - round, height - round}, round, 0.0, 0.5 * kPi, 5));
+        extend(p, segment({radius - round, height}, {0.0, height}, 8));
+    }
+    return revolve(p, kRevolveSegments);
+}
+
 // ---- car: a toy car — body with rounded ends and wheel arches, a cabin, four wheels.
 
 Surface make_car(Rng& rng) {

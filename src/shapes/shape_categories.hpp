@@ -1,5 +1,5 @@
 #pragma once
-// The ten parametric categories of the shape generator. Each builder draws its parameters from
+// The parametric categories of the shape generator. Each builder draws its parameters from
 // `rng` and returns the shape's closed components in metres, +z up (placement on z = 0 and
 // centring are left to the caller).
 
@@ -11,6 +11,7 @@ Surface make_apple(Rng& rng);
 Surface make_banana(Rng& rng);
 Surface make_bottle(Rng& rng);
 Surface make_bowl(Rng& rng);
+Surface make_can(Rng& rng);
 Surface make_car(Rng& rng);
 Surface make_donut(Rng& rng);
 Surface make_hammer(Rng& rng);

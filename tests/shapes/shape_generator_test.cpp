@@ -289,6 +289,7 @@ const std::map<std::string, Expected>& expected() {
         {"banana", {{0.150, 0.250}, {0.025, 0.060}, 1, 1, 2}},
         {"bottle", {{0.180, 0.350}, {0.180, 0.350}, 1, 1, 2}},
         {"bowl", {{0.110, 0.230}, {0.040, 0.090}, 1, 1, 2}},
+        {"can", {{0.120, 0.226}, {0.036, 0.220}, 1, 1, 2}},
         {"car", {{0.080, 0.200}, {0.030, 0.100}, 6, 6, 2}},
         {"donut", {{0.070, 0.130}, {0.020, 0.050}, 1, 1, 0}},
         {"hammer", {{0.200, 0.350}, {0.015, 0.035}, 4, 5, 2}},
@@ -377,7 +378,14 @@ TEST_P(EveryCategory, RaysFromOutsideMeetFrontFacesFirst) {
             << category << " #" << i;
 }
 
-INSTANTIATE_TEST_SUITE_P(Generator, EveryCategory, ::testing::ValuesIn(esf::generated_categories()),
+// The paper's ten and the wide tins, generated only when named.
+std::vector<std::string> every_category() {
+    std::vector<std::string> all = esf::generated_categories();
+    all.emplace_back("can");
+    return all;
+}
+
+INSTANTIATE_TEST_SUITE_P(Generator, EveryCategory, ::testing::ValuesIn(every_category()),
                          [](const auto& param_info) { return param_info.param; });
 
 // ---- Shape-specific properties ---------------------------------------------------------------
@@ -431,6 +439,42 @@ TEST(ShapeGenerator, MugsAndBowlsAreHollow) {
     }
 }
 
+TEST(ShapeGenerator, CansAreWideClosedTinsNamedOnly) {
+    // Not among the paper's ten (the demo's set), generated when named.
+    const std::vector<std::string> ten = esf::generated_categories();
+    EXPECT_EQ(ten.size(), 10u);
+    EXPECT_EQ(std::find(ten.begin(), ten.end(), "can"), ten.end());
+    EXPECT_EQ(esf::generate_dataset(options(2, 1, {"can"})).size(), 2u);
+    int lids = 0;
+    for (int i = 0; i < 16; ++i) {
+        SCOPED_TRACE(i);
+        const Mesh m = esf::generate_shape("can", 3, i);
+        const Eigen::Vector3f e = extent(m);
+        EXPECT_NEAR(e.x(), e.y(), 1e-4f);  // round
+        // 12 to 22 cm across (a lid's lip adds at most 5 mm), 0.3 to 1 times as high.
+        EXPECT_GE(e.x(), 0.12f);
+        EXPECT_LE(e.x(), 0.226f);
+        EXPECT_GE(e.z(), 0.29f * e.x());
+        EXPECT_LE(e.z(), 1.0f * e.x());
+        // Closed and solid: it fills its bounding cylinder but for the rounded rims.
+        const Topology topo = analyse(m);
+        ASSERT_EQ(topo.components.size(), 1u);
+        const double radius = 0.5 * e.x();
+        const double hull = M_PI * radius * radius * e.z();
+        EXPECT_GT(topo.components[0].volume, 0.85 * hull);
+        EXPECT_LE(topo.components[0].volume, hull);
+        EXPECT_TRUE(vertical_ray_hits(m, 0.0f, 0.0f));
+        // A lid's lip stands out from the body: the widest ring is not at mid-height.
+        float mid_radius = 0.0f;
+        for (const Eigen::Vector3f& v : m.vertices)
+            if (std::abs(v.z() - 0.5f * e.z()) < 0.25f * e.z())
+                mid_radius = std::max(mid_radius, v.head<2>().norm());
+        lids += mid_radius < 0.5f * e.x() - 5e-4f;
+    }
+    EXPECT_GT(lids, 2);  // about half have a lid
+    EXPECT_LT(lids, 14);
+}
+
 TEST(ShapeGenerator, DatasetIsAPrefixAndThreadIndependent) {
     const esf::GeneratorOptions small = options(2, 3, {"mug", "car"}, 1);
     const esf::GeneratorOptions large = options(3, 3, {"mug", "car"}, 4);
@@ -460,8 +504,8 @@ TEST(ShapeGenerator, RejectsBadArguments) {
         return std::string("no exception");
     };
     EXPECT_EQ(message([] { esf::generate_shape("spoon", 0, 0); }),
-              "unknown category 'spoon' (known: apple, banana, bottle, bowl, car, donut, hammer, "
-              "mug, tetra_pak, toilet_paper)");
+              "unknown category 'spoon' (known: apple, banana, bottle, bowl, can, car, donut, "
+              "hammer, mug, tetra_pak, toilet_paper)");
     EXPECT_EQ(message([] { esf::generate_shape("mug", 0, -1); }),
               "model index must be >= 0, got -1");
     EXPECT_EQ(message([] { esf::generate_dataset(options(0)); }), "per_class must be >= 1, got 0");

@@ -2,7 +2,8 @@
 // Procedural training models: parametric, randomised, watertight meshes of the ten categories of
 // the paper's Cat10 set (Wohlkinger & Vincze 2011, Sec. V: apple, banana, bottle, bowl, car,
 // donut, hammer, mug, tetra_pak, toilet_paper), so that esf trains without downloading a CAD
-// database.
+// database; and, named on request, wide tins as `can` models (12-22 cm across, the sizes that
+// scanned can sets lack), to add to a database of scanned models.
 //
 // Every model is in metres, +z up, standing (or lying) in its natural resting pose on z = 0,
 // centred in x and y. Each model is a union of closed components (a mug is its body and its
@@ -25,8 +26,8 @@
 
 namespace esf {
 
-/// The generated categories in alphabetical order: apple, banana, bottle, bowl, car, donut,
-/// hammer, mug, tetra_pak, toilet_paper.
+/// The paper's ten generated categories in alphabetical order: apple, banana, bottle, bowl, car,
+/// donut, hammer, mug, tetra_pak, toilet_paper. `can` (wide tins) is generated only when named.
 std::vector<std::string> generated_categories();
 
 /// Model `index` (>= 0) of `category`. Throws std::invalid_argument for an unknown category or a
@@ -39,7 +40,7 @@ std::string generated_model_name(const std::string& category, int index);
 struct GeneratorOptions {
     int per_class = 10;  ///< models per category, >= 1
     std::uint64_t seed = 0;
-    std::vector<std::string> categories;  ///< subset to generate; empty = all ten
+    std::vector<std::string> categories;  ///< to generate (the ten, or `can`); empty = the ten
     int threads = 0;                      ///< 0 = all cores
 };
 
