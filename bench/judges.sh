@@ -16,6 +16,9 @@
 #                 of training (for settings of `esf eval` alone; JUDGES_TRAIN is then refused)
 #   JUDGES_BASE   an earlier judged setting (a name in JUDGES_DIR): each figure is followed by its
 #                 change against that setting's, in brackets
+#   JUDGES_CANS   generated wide tins added to every database as can models (default 20, as the
+#                 README's database: `esf generate --categories can --per-class 20 --seed 1`);
+#                 0 leaves them out
 # The scene sets are those of BENCHMARKS.md: proving ground (3 folds of 100 tables of held-out
 # catalog groups, seed 1), sized proving ground (the same with --size-spread 0.25), household
 # proving ground (--categories of the real scenes), the shared real scenes in two folds, the 229
@@ -31,6 +34,8 @@ name="${JUDGES_NAME:-default}"
 [[ "$name" =~ ^[A-Za-z0-9._-]+$ ]] || { echo "judges: JUDGES_NAME '$name' is not a plain name" >&2; exit 1; }
 read -r -a train_args <<< "${JUDGES_TRAIN:-}"
 read -r -a eval_args <<< "${JUDGES_EVAL:-}"
+cans="${JUDGES_CANS:-20}"
+[[ "$cans" =~ ^[0-9]+$ ]] || { echo "judges: JUDGES_CANS '$cans' is not a count" >&2; exit 1; }
 meshes="$data/meshes"
 household=box,can,bowl,mug,bottle,cup
 
@@ -58,6 +63,11 @@ for k in 0 1 2; do
 done
 generate poseB -n 70 --seed 6
 generate pose -n 70 --seed 5
+if ((cans > 0)) && [[ ! -f "$work/sets/cans$cans/generate.json" ]]; then
+    "$esf" generate --categories can --per-class "$cans" --seed 1 -o "$work/sets/cans$cans" \
+        --json > "$work/sets/cans$cans.json"
+    mv "$work/sets/cans$cans.json" "$work/sets/cans$cans/generate.json"
+fi
 for k in 0 1; do
     [[ -f "$work/sets/real$k.csv" ]] ||
         "$root/scripts/mosd-scene-set.sh" --fold "$k/2" "$data" > "$work/sets/real$k.csv"
@@ -82,6 +92,10 @@ train() {  # DB [esf train options...]
     [[ -f "$db.json" ]] && return
     echo "== train $db" >&2
     "$esf" train "$meshes" -o "$db" "${train_args[@]}" "$@" --json > "$db.part.json"
+    if ((cans > 0)); then  # added to the same database (resumed with the meshes' catalog)
+        "$esf" train "$work/sets/cans$cans" -o "$db" --catalog "$meshes/catalog.csv" \
+            "${train_args[@]}" --json > /dev/null
+    fi
     mv "$db.part.json" "$db.json"
 }
 train "$databases/all.sqlite"

@@ -147,11 +147,20 @@ void check_settings(const Database& db, const Settings& wanted) {
     }
     for (const auto& [key, value] : stored)
         if (!wanted.count(key)) add(key + " unset (database: " + to_string(value) + ")");
+    // Models added from another folder (generated tins) take the catalog the database was
+    // trained with, which their folder lacks.
+    const auto catalog = stored.find("rescale_non_metric");
+    const auto wanted_catalog = wanted.find("rescale_non_metric");
+    const std::string catalog_hint =
+        catalog != stored.end() && wanted_catalog != wanted.end() &&
+                catalog->second != wanted_catalog->second
+            ? " (models from another folder: pass --catalog with the catalog it was trained with)"
+            : "";
     if (!differences.empty())
-        throw std::invalid_argument(
-            file_message(db.path(), 0,
-                         "database was trained with other settings: " + differences +
-                             "; train with the same options to resume, or into a new database"));
+        throw std::invalid_argument(file_message(
+            db.path(), 0,
+            "database was trained with other settings: " + differences +
+                "; train with the same options to resume, or into a new database" + catalog_hint));
 }
 
 /// A model being trained: its inputs, its renderer, then the entry to store.

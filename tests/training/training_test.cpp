@@ -292,8 +292,9 @@ TEST_F(TrainingRunTest, CatalogRescalesNonMetricModelsAndSetsGroups) {
     // Without the catalog the same database is refused (the scales would differ).
     TrainingOptions o = fast_options();
     o.use_catalog = false;
-    EXPECT_CONTAINS(error_of<std::invalid_argument>([&] { train(root(), db, o); }),
-                    "rescale_non_metric none (database: category_extent)");
+    const std::string refused = error_of<std::invalid_argument>([&] { train(root(), db, o); });
+    EXPECT_CONTAINS(refused, "rescale_non_metric none (database: category_extent)");
+    EXPECT_CONTAINS(refused, "pass --catalog with the catalog it was trained with");
 }
 
 TEST_F(TrainingRunTest, DatabasesFromBeforeTheCameraSettingsResume) {
