@@ -36,3 +36,21 @@ require_data() {
 # $EPOCHREALTIME (bash 5) as whole microseconds in REPLY. Times are read into variables: a
 # command substitution would fork a subshell, whose cost would be counted on both sides.
 us() { REPLY=$((10#${1/./})); }
+
+# Adds $2 generated wide tins to the database $1 as can models, as the README's database holds
+# them (`esf generate --categories can --per-class N --seed 1`, made once in $work/cans$2; then
+# `esf train` resumes $1 with them and the shared meshes' catalog). Further arguments are the
+# database's `esf train` options, which a resumed database must be given again. 0 tins: nothing.
+add_generated_cans() {
+    local db="$1" count="$2"
+    shift 2
+    [[ "$count" =~ ^[0-9]+$ ]] || { echo "$bench_name: '$count' tins is not a count" >&2; exit 1; }
+    ((count > 0)) || return 0
+    local tins="$work/cans$count"
+    if [[ ! -f "$tins/generate.json" ]]; then
+        "$esf" generate --categories can --per-class "$count" --seed 1 -o "$tins" --json \
+            > "$tins.json"
+        mv "$tins.json" "$tins/generate.json"
+    fi
+    "$esf" train "$tins" -o "$db" --catalog "$data/meshes/catalog.csv" "$@" --json > /dev/null
+}

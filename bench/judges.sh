@@ -35,7 +35,6 @@ name="${JUDGES_NAME:-default}"
 read -r -a train_args <<< "${JUDGES_TRAIN:-}"
 read -r -a eval_args <<< "${JUDGES_EVAL:-}"
 cans="${JUDGES_CANS:-20}"
-[[ "$cans" =~ ^[0-9]+$ ]] || { echo "judges: JUDGES_CANS '$cans' is not a count" >&2; exit 1; }
 meshes="$data/meshes"
 household=box,can,bowl,mug,bottle,cup
 
@@ -63,11 +62,6 @@ for k in 0 1 2; do
 done
 generate poseB -n 70 --seed 6
 generate pose -n 70 --seed 5
-if ((cans > 0)) && [[ ! -f "$work/sets/cans$cans/generate.json" ]]; then
-    "$esf" generate --categories can --per-class "$cans" --seed 1 -o "$work/sets/cans$cans" \
-        --json > "$work/sets/cans$cans.json"
-    mv "$work/sets/cans$cans.json" "$work/sets/cans$cans/generate.json"
-fi
 for k in 0 1; do
     [[ -f "$work/sets/real$k.csv" ]] ||
         "$root/scripts/mosd-scene-set.sh" --fold "$k/2" "$data" > "$work/sets/real$k.csv"
@@ -92,10 +86,7 @@ train() {  # DB [esf train options...]
     [[ -f "$db.json" ]] && return
     echo "== train $db" >&2
     "$esf" train "$meshes" -o "$db" "${train_args[@]}" "$@" --json > "$db.part.json"
-    if ((cans > 0)); then  # added to the same database (resumed with the meshes' catalog)
-        "$esf" train "$work/sets/cans$cans" -o "$db" --catalog "$meshes/catalog.csv" \
-            "${train_args[@]}" --json > /dev/null
-    fi
+    add_generated_cans "$db" "$cans" "${train_args[@]}"
     mv "$db.part.json" "$db.json"
 }
 train "$databases/all.sqlite"

@@ -15,6 +15,8 @@
 # $PROVING_GROUND_CATEGORIES (comma-separated) generates scenes of those categories only
 # (`esf generate-scenes --categories`; the household proving ground of BENCHMARKS.md uses
 # box,can,bowl,mug,bottle,cup, the classes of the real scenes); the databases are the same.
+# Each database holds $PROVING_GROUND_CANS generated wide tins as can models, as the README's
+# does (default 20; 0: none).
 set -euo pipefail
 bench_name=proving_ground
 source "$(dirname "$0")/bench_env.sh"
@@ -36,9 +38,12 @@ if [[ -n "$categories" ]]; then
 fi
 for ((k = 0; k < folds; k++)); do
     echo "== fold $k/$folds: train on the other folds, $scenes scenes of this fold's groups" >&2
-    [[ -f "$work/train$k.json" ]] ||
+    if [[ ! -f "$work/train$k.json" ]]; then
         "$esf" train "$data/meshes" -o "$work/fold$k.sqlite" --other-folds "$k/$folds" --json \
-            > "$work/train$k.json"
+            > "$work/train$k.part.json"
+        add_generated_cans "$work/fold$k.sqlite" "${PROVING_GROUND_CANS:-20}"
+        mv "$work/train$k.part.json" "$work/train$k.json"
+    fi
     [[ -f "$work/generate$k$sized.json" ]] ||
         "$esf" generate-scenes "$data/meshes" -o "$work/scenes$k$sized" -n "$scenes" --seed "$seed" \
             --fold "$k/$folds" --size-spread "$size_spread" "${category_args[@]}" --json \

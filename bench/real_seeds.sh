@@ -9,7 +9,8 @@
 #   bench/real_seeds.sh [BUILD_DIR] [SEEDS]
 # Defaults: build, "0 1 2". Extra options: $REAL_SEEDS_TRAIN (esf train), $REAL_SEEDS_EVAL (esf
 # eval). Work files go to $REAL_SEEDS_DIR (default: a new temporary folder, removed at the end);
-# databases already there are reused.
+# databases already there are reused. Each database holds $REAL_SEEDS_CANS generated wide tins
+# as can models, as the README's does (default 20; 0: none).
 set -euo pipefail
 bench_name=real_seeds
 source "$(dirname "$0")/bench_env.sh"
@@ -26,9 +27,13 @@ for k in 0 1; do
 done
 for seed in $seeds; do
     echo "== seed $seed: train, then the real views and both scene folds" >&2
-    [[ -f "$work/train_$seed.json" ]] ||
+    if [[ ! -f "$work/train_$seed.json" ]]; then
         "$esf" train "$data/meshes" -o "$work/seed_$seed.sqlite" --seed "$seed" \
-            "${train_args[@]}" --json > "$work/train_$seed.json"
+            "${train_args[@]}" --json > "$work/train_$seed.part.json"
+        add_generated_cans "$work/seed_$seed.sqlite" "${REAL_SEEDS_CANS:-20}" --seed "$seed" \
+            "${train_args[@]}"
+        mv "$work/train_$seed.part.json" "$work/train_$seed.json"
+    fi
     "$esf" eval "$work/seed_$seed.sqlite" "$data/real/labels.csv" --json "${eval_args[@]}" \
         > "$work/views_$seed.json"
     for k in 0 1; do
