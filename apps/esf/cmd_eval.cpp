@@ -123,8 +123,9 @@ void run_scene_eval(const EvalArgs& args) {
                 "\npose (truth.json; objects at least half visible whose model %s holds):\n",
                 args.database.c_str());
             for (const SceneTypeSummary& t : report.types) {
-                std::printf("%-16s %7zu judged, ADD-S < 0.1 d: %s%%", t.type.c_str(), t.posed,
-                            percent_of(t.pose_correct, t.posed).c_str());
+                std::printf("%-16s %7zu judged, ADD-S < 0.1 d: %s%% (%s%% whatever model named)",
+                            t.type.c_str(), t.posed, percent_of(t.pose_correct, t.posed).c_str(),
+                            percent_of(t.pose_correct_any_model, t.posed).c_str());
                 if (!t.rotation_errors.empty())
                     std::printf("; rotation error of %zu without symmetry: median %.1f deg",
                                 t.rotation_errors.size(), t.rotation_median());

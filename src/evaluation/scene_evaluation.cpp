@@ -199,10 +199,14 @@ void judge_pose(const SceneTruth& truth, TrueModels& models,
     if (t.visible < 0.5 || !held.count({t.class_name, name})) return;
     outcome.pose_judged = true;
     outcome.add_s = std::numeric_limits<double>::infinity();
-    if (!outcome.correct || outcome.predicted_model != name || !outcome.pose) return;
+    outcome.add_s_any_model = std::numeric_limits<double>::infinity();
+    if (outcome.segmentation.outcome != SegmentOutcome::kFound || !outcome.pose) return;
     const TrueModels::Model& model = models.of(t.model);
-    outcome.add_s = add_s(model.points, t.pose, outcome.pose->cast<double>()) /
-                    posed_diameter(model.points, t.pose);
+    outcome.add_s_any_model = add_s(model.points, t.pose, outcome.pose->cast<double>()) /
+                              posed_diameter(model.points, t.pose);
+    outcome.pose_correct_any_model = outcome.add_s_any_model < kAddSThreshold;
+    if (!outcome.correct || outcome.predicted_model != name) return;
+    outcome.add_s = outcome.add_s_any_model;
     outcome.pose_correct = outcome.add_s < kAddSThreshold;
     if (!model.symmetric)
         outcome.rotation_error = rotation_error_degrees(t.pose, outcome.pose->cast<double>());
@@ -289,6 +293,7 @@ SceneEvaluationReport evaluate_scenes(const Recognizer& recognizer, const SceneS
                     t->correct += outcome.correct;
                     t->posed += outcome.pose_judged;
                     t->pose_correct += outcome.pose_correct;
+                    t->pose_correct_any_model += outcome.pose_correct_any_model;
                     if (outcome.rotation_error)
                         t->rotation_errors.push_back(*outcome.rotation_error);
                 }

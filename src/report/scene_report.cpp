@@ -91,6 +91,7 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
                                 {"posed", t.posed},
                                 {"pose_correct", t.pose_correct},
                                 {"pose_rate", t.pose_rate()},
+                                {"pose_correct_any_model", t.pose_correct_any_model},
                                 {"rotations", t.rotation_errors.size()},
                                 {"rotation_median_deg", finite_or_null(t.rotation_median())}});
     out["classes"] = nlohmann::json::array();
@@ -123,6 +124,9 @@ std::string scene_report_json(const SceneEvaluationReport& report) {
              {"add_s", o.pose_judged ? finite_or_null(o.add_s) : nlohmann::json(nullptr)},
              {"pose_judged", o.pose_judged},
              {"pose_correct", o.pose_correct},
+             {"add_s_any_model",
+              o.pose_judged ? finite_or_null(o.add_s_any_model) : nlohmann::json(nullptr)},
+             {"pose_correct_any_model", o.pose_correct_any_model},
              {"rotation_error_deg", finite_or_null(o.rotation_error.value_or(
                                         std::numeric_limits<double>::quiet_NaN()))}});
     out["failures"] = nlohmann::json::array();
@@ -152,7 +156,8 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
             "type</th><th>scenes</th><th>objects</th><th>found</th>"
             "<th>split</th><th>merged</th><th>missed</th><th>shared clusters</th>"
             "<th>one cluster</th><th>end to end</th>"
-         << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th><th>rotations judged</th>"
+         << (poses ? "<th>poses judged</th><th>ADD-S &lt; 0.1 d</th>"
+                     "<th>... whatever model named</th><th>rotations judged</th>"
                      "<th>median rotation error</th>"
                    : "")
          << "</tr>\n";
@@ -164,7 +169,8 @@ std::string scene_report_html(const SceneEvaluationReport& report, const std::st
              << share(t.correct, t.labelled) << "</td>";
         if (poses)
             html << "<td>" << t.posed << "</td><td>" << share(t.pose_correct, t.posed)
-                 << "</td><td>" << t.rotation_errors.size() << "</td><td>"
+                 << "</td><td>" << share(t.pose_correct_any_model, t.posed) << "</td><td>"
+                 << t.rotation_errors.size() << "</td><td>"
                  << (t.rotation_errors.empty()
                          ? std::string("-")
                          : detail::fixed_text(t.rotation_median(), 1) + "&deg;")

@@ -291,6 +291,22 @@ TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTh
     EXPECT_GT(own_model, 0u);
     EXPECT_GE(static_cast<double>(placed), 0.75 * static_cast<double>(own_model));
     EXPECT_EQ(b.pose_correct, placed);
+    // Whatever model was named, the own model is scored under the pose found: the same ADD-S
+    // where the own model was named, a finite one for every found object with a pose, and no
+    // fewer poses right.
+    std::size_t any_model = 0;
+    for (const esf::SceneObjectOutcome& o : verified.objects) {
+        if (!o.pose_judged) continue;
+        const bool found = o.segmentation.outcome == esf::SegmentOutcome::kFound;
+        EXPECT_EQ(std::isfinite(o.add_s_any_model), found && o.pose.has_value());
+        if (std::isfinite(o.add_s)) {
+            EXPECT_EQ(o.add_s_any_model, o.add_s);
+        }
+        EXPECT_EQ(o.pose_correct_any_model, o.add_s_any_model < esf::kAddSThreshold);
+        any_model += o.pose_correct_any_model;
+    }
+    EXPECT_GE(any_model, placed);
+    EXPECT_EQ(b.pose_correct_any_model, any_model);
     // The classes' rows add up to the overall one.
     std::size_t class_objects = 0, class_correct = 0;
     for (const esf::SceneClassSummary& c : verified.classes) {
@@ -307,6 +323,7 @@ TEST_F(GeneratedScenesTest, PosesAreJudgedAgainstTheTruthAndVerificationPlacesTh
     // Reports carry the pose columns.
     const nlohmann::json json = nlohmann::json::parse(esf::scene_report_json(verified));
     EXPECT_EQ(json["types"].back()["pose_correct"].get<std::size_t>(), placed);
+    EXPECT_EQ(json["types"].back()["pose_correct_any_model"].get<std::size_t>(), any_model);
     EXPECT_TRUE(json["types"].back()["rotation_median_deg"].is_null());
     EXPECT_NE(esf::scene_report_html(verified, "t").find("ADD-S &lt; 0.1 d"), std::string::npos);
     esf::SceneEvaluationReport without_truth = plain;

@@ -81,6 +81,12 @@ struct SceneObjectOutcome {
     bool pose_judged = false;
     double add_s = 0.0;
     bool pose_correct = false;  ///< judged and add_s < kAddSThreshold
+    /// Judged and found with a pose, whatever class and model were named: ADD-S of the object's
+    /// own model under that pose (as BOP scores a pose of a known object), over its diameter;
+    /// infinity when not found or without a pose. A look-alike named in its place (the three
+    /// Coke bottles) counts when its mesh shares the own model's frame and pose.
+    double add_s_any_model = 0.0;
+    bool pose_correct_any_model = false;  ///< judged and add_s_any_model < kAddSThreshold
     /// Judged, named with its own model, and that model without a symmetry (has_symmetry):
     /// the angle between the true and the predicted rotation, degrees; otherwise empty.
     std::optional<double> rotation_error;
@@ -94,6 +100,7 @@ struct SceneTypeSummary {
     std::size_t correct = 0;       ///< of them: found and named right
     std::size_t posed = 0;         ///< objects whose pose was judged (truth.json)
     std::size_t pose_correct = 0;  ///< of them: ADD-S below kAddSThreshold of the diameter
+    std::size_t pose_correct_any_model = 0;  ///< ... with the own model under the pose found
     /// The rotation errors of the objects that have one (SceneObjectOutcome::rotation_error),
     /// degrees, in the order of the objects.
     std::vector<double> rotation_errors;
