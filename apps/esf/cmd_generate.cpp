@@ -108,7 +108,8 @@ void add_generate_command(CLI::App& app) {
             ";\n"
             "and, only when named, can: wide tins (12-22 cm across, closed, rounded rims, half\n"
             "with a lid), the cans that scanned can sets lack, to add to a database of scans\n"
-            "(`esf train DIR -o DB` on a database of ../shared/data/meshes adds them).\n"
+            "(`esf train DIR -o DB --catalog ../shared/data/meshes/catalog.csv` adds them to a\n"
+            "database of the shared meshes).\n"
             "Model i of a category depends only on (seed, category, i): --per-class 5 gives the\n"
             "first 5 models of --per-class 10, whatever the thread count. Train on them with\n"
             "`esf train DIR -o DB`.");
