@@ -1,5 +1,6 @@
 #include "esf/recognition/recognizer.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -655,31 +656,6 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
     return out;
 }
 
-namespace {
-
-// The pixels an object's points fall on lie within this box (inclusive; empty when lo > hi).
-struct PixelBox {
-    long u_lo = std::numeric_limits<long>::max(), v_lo = std::numeric_limits<long>::max();
-    long u_hi = std::numeric_limits<long>::min(), v_hi = std::numeric_limits<long>::min();
-    void add(long u, long v) {
-        u_lo = std::min(u_lo, u);
-        v_lo = std::min(v_lo, v);
-        u_hi = std::max(u_hi, u);
-        v_hi = std::max(v_hi, v);
-    }
-    bool empty() const { return u_lo > u_hi; }
-    PixelBox grown(long by) const {
-        return empty() ? *this : PixelBox{u_lo - by, v_lo - by, u_hi + by, v_hi + by};
-    }
-    bool holds(long u, long v) const { return u >= u_lo && u <= u_hi && v >= v_lo && v <= v_hi; }
-    bool meets(const PixelBox& o) const {
-        return !empty() && !o.empty() && u_lo <= o.u_hi && o.u_lo <= u_hi && v_lo <= o.v_hi &&
-               o.v_lo <= v_hi;
-    }
-};
-
-}  // namespace
-
 void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) const {
     // Parts meet where a pixel of one, up to 6 pixels on along its row or column from a pixel of
     // the other, is within this of it (a thin stem or handle between them may be lost).
@@ -699,7 +675,12 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
     // box that holds them all, so that only that box is cleared and visited.
     constexpr std::uint32_t kNoPixel = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::vector<std::uint32_t>> pixels(objects.size());
-    long u0 = camera.width, v0 = camera.height, u1 = -1, v1 = -1;
+    // The box of each object's pixels, in the numbering's box: a pixel meets another object only
+    // within kReach pixels of that object's box.
+    using PixelBox = Eigen::AlignedBox<long, 2>;
+    std::vector<PixelBox> boxes(objects.size());
+    PixelBox all;
+    long width = 0, height = 0;  // of the numbering's box
     {
         std::vector<std::vector<std::pair<long, long>>> uv(objects.size());
         for (std::size_t i = 0; i < objects.size(); ++i) {
@@ -710,23 +691,23 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
                     uv[i].emplace_back(-1, -1);
                     continue;
                 }
-                u0 = std::min(u0, u);
-                v0 = std::min(v0, v);
-                u1 = std::max(u1, u);
-                v1 = std::max(v1, v);
+                boxes[i].extend(PixelBox::VectorType(u, v));
                 uv[i].emplace_back(u, v);
             }
+            all.extend(boxes[i]);
         }
-        if (u1 < 0) return;
+        if (all.isEmpty()) return;
+        width = all.sizes().x() + 1;
+        height = all.sizes().y() + 1;
         for (std::size_t i = 0; i < objects.size(); ++i) {
+            if (!boxes[i].isEmpty()) boxes[i].translate(-all.min());
             pixels[i].reserve(uv[i].size());
             for (const auto& [u, v] : uv[i])
-                pixels[i].push_back(
-                    u < 0 ? kNoPixel
-                          : static_cast<std::uint32_t>((v - v0) * (u1 - u0 + 1) + (u - u0)));
+                pixels[i].push_back(u < 0 ? kNoPixel
+                                          : static_cast<std::uint32_t>((v - all.min().y()) * width +
+                                                                       (u - all.min().x())));
         }
     }
-    const long width = u1 - u0 + 1, height = v1 - v0 + 1;
     // Objects made in the last round. A pair of two older ones was judged before: rejected, or
     // short of contacts or of a fit then as now. Only pairs with a new one are looked for.
     std::vector<bool> fresh(objects.size(), true);
@@ -751,20 +732,19 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         // from the new object's pixel, or from the older one's pixel before it.
         std::map<std::pair<int, int>, std::size_t> contacts;
         const bool older = std::find(fresh.begin(), fresh.end(), false) != fresh.end();
-        // A pixel meets another object only within kReach pixels of that object's box, so each
-        // fresh object reads only its pixels near the boxes of the objects it may meet.
-        std::vector<PixelBox> boxes(objects.size());
+        // Each fresh object reads only its pixels near the boxes of the objects it may meet.
+        std::vector<PixelBox> reach(objects.size());
         for (std::size_t i = 0; i < objects.size(); ++i)
-            for (const std::uint32_t pixel : pixels[i])
-                if (pixel != kNoPixel) boxes[i].add(pixel % width, pixel / width);
+            if (!boxes[i].isEmpty())
+                reach[i] =
+                    PixelBox(boxes[i].min().array() - kReach, boxes[i].max().array() + kReach);
         std::vector<PixelBox> near;
         for (std::size_t i = 0; i < objects.size(); ++i) {
             if (!fresh[i]) continue;
             const int a = static_cast<int>(i);
             near.clear();
             for (std::size_t j = 0; j < objects.size(); ++j)
-                if (j != i && boxes[j].grown(kReach).meets(boxes[i]))
-                    near.push_back(boxes[j].grown(kReach));
+                if (j != i && reach[j].intersects(boxes[i])) near.push_back(reach[j]);
             if (near.empty()) continue;
             for (std::size_t k = 0; k < pixels[i].size(); ++k) {
                 const std::uint32_t pixel = pixels[i][k];
@@ -772,8 +752,9 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
                 if (pixel == kNoPixel || seen[pixel] != &objects[i].cluster.points[k]) continue;
                 const auto u = static_cast<long>(pixel) % width;
                 const auto v = static_cast<long>(pixel) / width;
-                if (std::none_of(near.begin(), near.end(),
-                                 [&](const PixelBox& box) { return box.holds(u, v); }))
+                if (std::none_of(near.begin(), near.end(), [&](const PixelBox& box) {
+                        return box.contains(PixelBox::VectorType(u, v));
+                    }))
                     continue;
                 for (const long step : kSteps)
                     for (const auto& [du, dv] : {std::pair{step, 0L}, std::pair{0L, step}}) {
@@ -843,6 +824,7 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         std::vector<RecognizedObject> next;
         std::vector<std::size_t> next_names;
         std::vector<std::vector<std::uint32_t>> next_pixels;
+        std::vector<PixelBox> next_boxes;
         for (Pair& pair : pairs) {
             if (!pair.fits) {
                 rejected.insert(std::minmax(names[pair.a], names[pair.b]));
@@ -855,6 +837,7 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
             next_pixels.push_back(pixels[pair.a]);  // merge_clusters: a's points, then b's
             next_pixels.back().insert(next_pixels.back().end(), pixels[pair.b].begin(),
                                       pixels[pair.b].end());
+            next_boxes.push_back(boxes[pair.a].merged(boxes[pair.b]));
         }
         if (next.empty()) return;
         const std::size_t made = next.size();
@@ -863,6 +846,7 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
                 next.push_back(std::move(objects[i]));
                 next_names.push_back(names[i]);
                 next_pixels.push_back(std::move(pixels[i]));
+                next_boxes.push_back(boxes[i]);
             }
         // Largest first, as segmentation orders them.
         std::vector<std::size_t> order(next.size());
@@ -873,11 +857,13 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
         objects.clear();
         names.clear();
         pixels.clear();
+        boxes.clear();
         fresh.clear();
         for (const std::size_t i : order) {
             objects.push_back(std::move(next[i]));
             names.push_back(next_names[i]);
             pixels.push_back(std::move(next_pixels[i]));
+            boxes.push_back(next_boxes[i]);
             fresh.push_back(i < made);
         }
     }

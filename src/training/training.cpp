@@ -136,31 +136,30 @@ void check_settings(const Database& db, const Settings& wanted) {
         {"camera_min_elevation", -90.0},
         {"camera_max_elevation", 90.0},
     };
+    // Models added from another folder (generated tins) take the catalog the database was
+    // trained with, which their folder lacks.
+    std::string hint;
     for (const auto& [key, value] : wanted) {
         const auto it = stored.find(key);
         const auto old = legacy.find(key);
         if (it == stored.end() && old != legacy.end() && old->second == value) continue;
-        if (it == stored.end())
+        if (it == stored.end()) {
             add(key + " " + to_string(value) + " (database: unset)");
-        else if (it->second != value)
+        } else if (it->second != value) {
             add(key + " " + to_string(value) + " (database: " + to_string(it->second) + ")");
+            if (key == "rescale_non_metric")
+                hint =
+                    " (models from another folder: pass --catalog with the catalog it was "
+                    "trained with)";
+        }
     }
     for (const auto& [key, value] : stored)
         if (!wanted.count(key)) add(key + " unset (database: " + to_string(value) + ")");
-    // Models added from another folder (generated tins) take the catalog the database was
-    // trained with, which their folder lacks.
-    const auto catalog = stored.find("rescale_non_metric");
-    const auto wanted_catalog = wanted.find("rescale_non_metric");
-    const std::string catalog_hint =
-        catalog != stored.end() && wanted_catalog != wanted.end() &&
-                catalog->second != wanted_catalog->second
-            ? " (models from another folder: pass --catalog with the catalog it was trained with)"
-            : "";
     if (!differences.empty())
         throw std::invalid_argument(file_message(
             db.path(), 0,
             "database was trained with other settings: " + differences +
-                "; train with the same options to resume, or into a new database" + catalog_hint));
+                "; train with the same options to resume, or into a new database" + hint));
 }
 
 /// A model being trained: its inputs, its renderer, then the entry to store.
