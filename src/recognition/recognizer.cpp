@@ -515,10 +515,21 @@ void Recognizer::verify(Classification& c, const Observation& observation, const
         if (fits[j].abandoned) return -std::numeric_limits<double>::infinity();
         return fits[j].fit.score() - shape_term(c.neighbours[picks[j]].model_id);
     };
-    const auto best_compared = [&] {
-        double best = -std::numeric_limits<double>::infinity();
-        for (std::size_t j = 0; j < fits.size(); ++j) best = std::max(best, compared(j));
-        return best;
+    // What a candidate's compared score must exceed to be named: the best so far, less the best's
+    // resizing where the candidate shares its class (the look-alike rule below may then name
+    // it for needing less).
+    const auto bar_for = [&](const std::string& class_name) {
+        double bar = -std::numeric_limits<double>::infinity();
+        std::size_t best = 0;
+        for (std::size_t j = 0; j < fits.size(); ++j)
+            if (compared(j) > bar) {
+                bar = compared(j);
+                best = j;
+            }
+        if (!fits.empty() && std::isfinite(bar) &&
+            c.neighbours[picks[best]].class_name == class_name)
+            bar -= o.resize_weight * std::abs(std::log(fits[best].scale));
+        return bar;
     };
     const bool prior_kept = !fits.empty() && fits.front().verified &&
                             fits.front().fit.score() >= prior->score - o.prior_tolerance;
@@ -540,7 +551,7 @@ void Recognizer::verify(Classification& c, const Observation& observation, const
             // A candidate that cannot win is dropped as soon as that is sure (where no fit ends
             // the search early, which needs every fit whole).
             const double must_beat = o.accept_score > 1.0 && !out_candidates
-                                         ? best_compared() + shape_term(model)
+                                         ? bar_for(c.neighbours[i].class_name) + shape_term(model)
                                          : -std::numeric_limits<double>::infinity();
             picks.push_back(i);
             fits.push_back(fit_model(*impl_->surface(model), c.neighbours[i].pose.cast<double>(),
