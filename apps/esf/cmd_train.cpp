@@ -38,6 +38,7 @@ struct TrainArgs {
     double min_elevation = kTrainingMinElevation;
     double max_elevation = 90.0;
     std::size_t min_points = 50;
+    std::size_t occlusions = kTrainingOcclusions;
     std::size_t surface_points = kTrainingSurfacePoints;
     std::string catalog;
     bool no_catalog = false;
@@ -71,6 +72,7 @@ void run_train(const TrainArgs& args) {
     options.descriptor_options.primitive_weight = args.primitive_weight;
     options.seed = args.seed;
     options.min_points = args.min_points;
+    options.occlusions = args.occlusions;
     options.surface_points = args.surface_points;
     options.threads = args.threads;
     options.catalog = args.catalog;
@@ -213,6 +215,12 @@ void add_train_command(CLI::App& app) {
     cmd->add_option("--min-points", args->min_points,
                     "Views with fewer points are skipped (and counted)")
         ->check(CLI::Range(3, 1000000))
+        ->capture_default_str();
+    cmd->add_option("--occlusions", args->occlusions,
+                    "Each view is also described this many times with part of it hidden (an edge "
+                    "across the image, 20 to 50 % of its points, as a nearer object hides them): "
+                    "more signatures of the view, which a partly hidden object matches (0: none)")
+        ->check(CLI::Range(std::size_t{0}, kMaxTrainingOcclusions))
         ->capture_default_str();
     cmd->add_option("--surface-points", args->surface_points,
                     "Samples of each model's surface stored for verification (0: none; "

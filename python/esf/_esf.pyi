@@ -212,6 +212,7 @@ def train(
     min_elevation: float = ...,
     max_elevation: float = ...,
     min_points: int = ...,
+    occlusions: int = ...,
     catalog: PathLike | None = None,
     use_catalog: bool = ...,
     threads: int = ...,

@@ -29,8 +29,8 @@ py::dict train_py(const fs::path& root, const fs::path& database, const std::str
                   int level, int samples, std::uint64_t seed, const std::string& noise,
                   std::optional<double> distance, std::optional<double> max_distance,
                   double min_elevation, double max_elevation, std::size_t min_points,
-                  std::optional<fs::path> catalog, bool use_catalog, int threads,
-                  std::optional<py::function> progress) {
+                  std::size_t occlusions, std::optional<fs::path> catalog, bool use_catalog,
+                  int threads, std::optional<py::function> progress) {
     TrainingOptions options;
     options.render.level = level;
     options.render.noise = parse_enum<SensorNoise>(noise);
@@ -43,6 +43,7 @@ py::dict train_py(const fs::path& root, const fs::path& database, const std::str
     options.descriptor_options.samples = samples;
     options.seed = seed;
     options.min_points = min_points;
+    options.occlusions = occlusions;
     options.threads = threads;
     if (catalog) options.catalog = catalog->string();
     options.use_catalog = use_catalog;
@@ -129,9 +130,9 @@ void bind_training(py::module_& m) {
           py::arg("max_distance") = training.render.max_distance,
           py::arg("min_elevation") = training.render.min_elevation,
           py::arg("max_elevation") = training.render.max_elevation,
-          py::arg("min_points") = training.min_points, py::arg("catalog") = py::none(),
-          py::arg("use_catalog") = training.use_catalog, py::arg("threads") = training.threads,
-          py::arg("progress") = py::none(),
+          py::arg("min_points") = training.min_points, py::arg("occlusions") = training.occlusions,
+          py::arg("catalog") = py::none(), py::arg("use_catalog") = training.use_catalog,
+          py::arg("threads") = training.threads, py::arg("progress") = py::none(),
           "Trains (or resumes) a database from ROOT/<category>/<model>.<ext> meshes, as "
           "``esf train``. ``progress`` is called with a TrainingProgress before the first and "
           "after every model. Ctrl-C, or an exception raised by ``progress``, stops training "

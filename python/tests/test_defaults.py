@@ -49,6 +49,7 @@ SHARED = {
     ("train", "min_elevation"): ("train", "--min-elevation"),
     ("train", "max_elevation"): ("train", "--max-elevation"),
     ("train", "min_points"): ("train", "--min-points"),
+    ("train", "occlusions"): ("train", "--occlusions"),
     ("render", "level"): ("render", "--level"),
     ("render", "fill"): ("render", "--fill"),
     ("render", "noise"): ("render", "--noise"),

@@ -24,7 +24,9 @@ def test_database_lists_what_the_cli_lists(cli, database):
     assert db.settings["descriptor"] == "esf-angles"
     assert db.descriptor_kinds[0][0] == "esf-angles"
     X, classes, models = db.descriptors()
-    assert X.shape == (db.view_count, db.descriptor_kinds[0][2]) and len(classes) == len(X)
+    # One row a signature: each view's own, then its occluded copies (esf train --occlusions).
+    assert X.shape[1] == db.descriptor_kinds[0][2] and len(classes) == len(X)
+    assert db.view_count < X.shape[0] <= (1 + int(db.settings["occlusions"])) * db.view_count
     first = db.models[0]
     views = db.views(first["category"], first["name"])
     assert len(views) == first["views"] + first["skipped_views"]

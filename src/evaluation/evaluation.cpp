@@ -401,12 +401,37 @@ LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::stri
         setup.row_views[r] = static_cast<std::uint32_t>(setup.view_category.size() - 1);
     }
     setup.view_first_row.push_back(matrix.rows());
+    setup.occluded_copies = setup.multi_signature && has_occluded_copies(matrix);
     std::size_t used = 0;
     for (const std::size_t v : setup.group_views) used += v > 0;
     if (used < 2)
         throw std::invalid_argument(what + ": the views belong to " + std::to_string(used) +
                                     " group; leaving one out needs at least two");
     return setup;
+}
+
+bool has_occluded_copies(const DescriptorMatrix& matrix) {
+    const std::vector<std::string> names = descriptor_names();
+    return std::find(names.begin(), names.end(), matrix.kind.name) != names.end() &&
+           !descriptor_info(matrix.kind.name).multi_signature;
+}
+
+DescriptorMatrix own_view_signatures(const DescriptorMatrix& matrix) {
+    DescriptorMatrix out;
+    out.kind = matrix.kind;
+    out.categories = matrix.categories;
+    out.models = matrix.models;
+    const auto dim = static_cast<std::size_t>(matrix.kind.dimension);
+    for (std::size_t r = 0; r < matrix.rows(); ++r) {
+        const DescriptorRow& row = matrix.row_info[r];
+        if (r > 0 && matrix.row_info[r - 1].model == row.model &&
+            matrix.row_info[r - 1].view_index == row.view_index)
+            continue;
+        out.row_info.push_back(row);
+        out.data.insert(out.data.end(), matrix.data.begin() + static_cast<std::ptrdiff_t>(r * dim),
+                        matrix.data.begin() + static_cast<std::ptrdiff_t>((r + 1) * dim));
+    }
+    return out;
 }
 
 std::vector<std::size_t> lomo_queries(std::size_t views, std::size_t max_queries) {
@@ -440,7 +465,8 @@ std::vector<KnnNeighbour> lomo_search(const KnnIndex& index, const LomoSetup& se
     const std::uint32_t group = setup.view_group[query];
     const std::size_t wanted = std::min(k + setup.group_views[group], index.views());
     auto keep = [&](std::uint32_t view) { return setup.view_group[view] != group; };
-    const std::size_t first = setup.view_first_row[query], last = setup.view_first_row[query + 1];
+    const std::size_t first = setup.view_first_row[query];
+    const std::size_t last = setup.occluded_copies ? first + 1 : setup.view_first_row[query + 1];
     if (last - first == 1) {
         const KnnResult r = index.search(index.row(first), wanted);
         std::vector<KnnNeighbour> out;
@@ -539,19 +565,31 @@ EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
                             threads, match_s, start);
 }
 
-EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const DescriptorMatrix& queries,
+EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix,
+                                   const DescriptorMatrix& all_queries,
                                    const std::vector<std::string>& query_groups,
                                    const SyntheticOptions& options) {
     const std::string what = "evaluate_held_out";
     if (options.k == 0) throw std::invalid_argument(what + ": k must be >= 1");
+    // A view of the database may hold several signatures (occluded copies: the index takes
+    // the nearest); a query is one row: a view's own signature, where the others are copies.
+    const DescriptorMatrix queries = detail::has_occluded_copies(all_queries)
+                                         ? detail::own_view_signatures(all_queries)
+                                         : all_queries;
+
     if (matrix.kind.name != queries.kind.name || matrix.kind.dimension != queries.kind.dimension)
         throw std::invalid_argument(what + ": queries hold " + queries.kind.name +
                                     " descriptors, the database " + matrix.kind.name);
     const int threads = resolve_threads(options.threads);
     const auto start = std::chrono::steady_clock::now();
     const detail::LomoSetup setup = detail::lomo_setup(matrix, options.groups, what);
-    if (setup.multi_signature || queries.rows() == 0)
-        throw std::invalid_argument(what + ": needs one signature per view and some queries");
+    bool multi_signature_queries = false;
+    for (std::size_t r = 1; r < queries.rows(); ++r)
+        multi_signature_queries |=
+            queries.row_info[r - 1].model == queries.row_info[r].model &&
+            queries.row_info[r - 1].view_index == queries.row_info[r].view_index;
+    if (multi_signature_queries || queries.rows() == 0)
+        throw std::invalid_argument(what + ": needs queries of one signature per view, and some");
     const KnnIndex index =
         detail::lomo_index(matrix, setup, options.weights, threads, options.one_view_per_model);
     // Group ids of the database's models by name, so a query's group is found by its name.

@@ -23,6 +23,9 @@ struct LomoSetup {
     std::vector<std::uint32_t> view_model;     ///< model of each view, numbered 0 .. M-1
     std::vector<std::size_t> group_views;      ///< views per group id
     bool multi_signature = false;              ///< some view has several rows
+    /// The rows after a view's first are occluded copies (training's `occlusions`, a descriptor
+    /// of one signature a cloud): a view queries with its first row, its own signature.
+    bool occluded_copies = false;
 
     std::size_t views() const { return view_category.size(); }
 };
@@ -33,6 +36,13 @@ struct LomoSetup {
 LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::string>& groups,
                      const std::string& what);
 
+/// Whether the views of `matrix` that hold several rows hold occluded copies after their own
+/// signature: the matrix's descriptor gives one signature a cloud.
+bool has_occluded_copies(const DescriptorMatrix& matrix);
+
+/// `matrix` with the first row of each view alone (its own signature, the copies dropped).
+DescriptorMatrix own_view_signatures(const DescriptorMatrix& matrix);
+
 /// Query views: all (max_queries = 0 or >= views) or floor(i * views / max_queries).
 std::vector<std::size_t> lomo_queries(std::size_t views, std::size_t max_queries);
 
@@ -42,7 +52,8 @@ KnnIndex lomo_index(const DescriptorMatrix& matrix, const LomoSetup& setup,
                     std::vector<float> weights, int threads, bool per_model);
 
 /// The k nearest views of view `query` among the views of the other groups, by (distance, view):
-/// exactly brute force. A multi-signature view's distance is the minimum over signature pairs.
+/// exactly brute force. A multi-signature view's distance is the minimum over signature pairs
+/// (over the rows of the view found, its first row alone querying, with occluded copies).
 std::vector<KnnNeighbour> lomo_search(const KnnIndex& index, const LomoSetup& setup,
                                       std::size_t query, std::size_t k);
 

@@ -211,8 +211,11 @@ void check_options(const DescriptorMatrix& matrix, const WeightLearningOptions& 
 
 }  // namespace
 
-WeightLearningResult learn_weights(const DescriptorMatrix& matrix,
+WeightLearningResult learn_weights(const DescriptorMatrix& trained,
                                    const WeightLearningOptions& options) {
+    // Views with occluded copies learn from their own signatures.
+    const DescriptorMatrix matrix =
+        detail::has_occluded_copies(trained) ? detail::own_view_signatures(trained) : trained;
     const std::vector<std::size_t> blocks =
         options.blocks.empty() ? descriptor_blocks(descriptor_info(matrix.kind.name))
                                : options.blocks;

@@ -20,6 +20,7 @@
 #include "esf/core/parallel.hpp"
 #include "esf/mesh/mesh.hpp"
 #include "esf/mesh/model_surface.hpp"
+#include "esf/render/occluded_view.hpp"
 #include "esf/training/descriptor_settings.hpp"
 
 namespace esf {
@@ -68,6 +69,10 @@ void validate(const TrainingOptions& options) {
     if (options.min_points < 3)
         throw std::invalid_argument("min_points must be >= 3 (ESF needs a triangle), got " +
                                     std::to_string(options.min_points));
+    if (options.occlusions > kMaxTrainingOcclusions)
+        throw std::invalid_argument("occlusions must be at most " +
+                                    std::to_string(kMaxTrainingOcclusions) + ", got " +
+                                    std::to_string(options.occlusions));
     if (options.surface_points > kMaxModelSurfacePoints)
         throw std::invalid_argument("surface points must be at most " +
                                     std::to_string(kMaxModelSurfacePoints) + ", got " +
@@ -135,6 +140,7 @@ void check_settings(const Database& db, const Settings& wanted) {
         {"camera_max_distance", std::string("none")},
         {"camera_min_elevation", -90.0},
         {"camera_max_elevation", 90.0},
+        {"occlusions", std::int64_t{0}},
     };
     // Models added from another folder (generated tins) take the catalog the database was
     // trained with, which their folder lacks.
@@ -258,7 +264,26 @@ void describe_view(Job& job, std::size_t v, const TrainingOptions& options,
         }
         view.descriptors.insert(view.descriptors.end(), s.begin(), s.end());
     }
-    if (view.descriptors.empty()) view.skip_reason = descriptor->info().name + ": no signature";
+    if (view.descriptors.empty()) {
+        view.skip_reason = descriptor->info().name + ": no signature";
+        return;
+    }
+    // Occluded copies: more signatures of the same view, after its own (for a descriptor of one
+    // signature a cloud; those of several have none). A copy too small or too degenerate to
+    // describe adds none.
+    const std::size_t copies = descriptor->info().multi_signature ? 0 : options.occlusions;
+    for (std::uint32_t copy = 0; copy < copies; ++copy) {
+        const OcclusionEdge edge = occlusion_edge(view_seed(job.seed, rendered.index), copy);
+        const Points hidden = occlude_view(rendered.points, edge.angle, edge.fraction);
+        if (hidden.size() < options.min_points) continue;
+        try {
+            for (const Signature& s : descriptor->compute(hidden))
+                if (s.size() == dim)
+                    view.descriptors.insert(view.descriptors.end(), s.begin(), s.end());
+        } catch (const std::invalid_argument&) {
+        } catch (const std::runtime_error&) {  // PCL's exceptions
+        }
+    }
 }
 
 }  // namespace
@@ -544,6 +569,7 @@ Settings training_settings(const TrainingOptions& options, bool rescale_non_metr
         {"target_extent", optional_value(r.target_extent)},
         {"noise", std::string(to_string(r.noise))},
         {"min_points", static_cast<std::int64_t>(options.min_points)},
+        {"occlusions", static_cast<std::int64_t>(options.occlusions)},
         {"rescale_non_metric", std::string(rescale_non_metric ? "category_extent" : "none")},
     };
     settings.merge(common);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <set>
 #include <sstream>
@@ -481,6 +482,46 @@ TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
     }
     EXPECT_EQ(error_of([&] { esf::evaluate_held_out(db, queries, {"g"}, options); }),
               "evaluate_held_out: 1 query groups for 12 models");
+}
+
+TEST(EvaluateHeldOut, AViewOfSeveralSignaturesIsAsNearAsItsNearest) {
+    // Database views of 1 to 3 signatures (occluded copies); queries of one.
+    const esf::DescriptorMatrix db = random_matrix(3, 4, 5, 24, 3, 11);
+    const esf::DescriptorMatrix queries = random_matrix(3, 4, 2, 24, 1, 29);
+    esf::SyntheticOptions options;
+    options.k = 3;
+    const EvaluationReport report = esf::evaluate_held_out(db, queries, {}, options);
+    ASSERT_EQ(report.queries.size(), queries.rows());
+    const std::size_t dim = 24;
+    for (std::size_t q = 0; q < queries.rows(); ++q) {
+        const esf::DescriptorRow& qr = queries.row_info[q];
+        // Brute force: each view of another model at its nearest signature.
+        std::map<std::pair<std::uint32_t, int>, double> views;
+        for (std::size_t r = 0; r < db.rows(); ++r) {
+            const esf::DescriptorRow& dr = db.row_info[r];
+            if (dr.category == qr.category &&
+                db.models[dr.model].name == queries.models[qr.model].name)
+                continue;
+            double d = 0.0;
+            for (std::size_t i = 0; i < dim; ++i)
+                d += std::abs(static_cast<double>(queries.data[q * dim + i]) -
+                              static_cast<double>(db.data[r * dim + i]));
+            const auto key = std::make_pair(dr.model, dr.view_index);
+            const auto it = views.find(key);
+            views[key] = it == views.end() ? d : std::min(it->second, d);
+        }
+        std::vector<std::pair<double, std::uint32_t>> all;  // (distance, model)
+        for (const auto& [key, d] : views) all.emplace_back(d, key.first);
+        std::sort(all.begin(), all.end());
+        const esf::QueryResult& line = report.queries[q];
+        EXPECT_NEAR(line.distance, all[0].first, 1e-6) << q;
+        EXPECT_EQ(line.predicted, db.models[all[0].second].category) << q;
+    }
+    // Queries of several signatures a view are refused.
+    EXPECT_NE(error_of([&] {
+                  esf::evaluate_held_out(queries, db, {}, options);
+              }).find("needs queries of one signature per view"),
+              std::string::npos);
 }
 
 // ---- test sets against a database -----------------------------------------------------------

@@ -376,7 +376,8 @@ struct BruteForceRow {
     std::size_t row;
 };
 
-/// All rows by (weighted) L1 distance to `query`, nearest first, ties by row.
+/// Every view at the (weighted) L1 distance of its nearest row to `query` (that row), nearest
+/// first, ties by row.
 std::vector<BruteForceRow> brute_force(const esf::DescriptorMatrix& m, std::span<const float> query,
                                        const std::vector<float>& weights) {
     std::vector<BruteForceRow> out;
@@ -390,7 +391,57 @@ std::vector<BruteForceRow> brute_force(const esf::DescriptorMatrix& m, std::span
     std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
         return a.distance != b.distance ? a.distance < b.distance : a.row < b.row;
     });
+    std::set<std::pair<std::uint32_t, int>> seen;  // (model, view): its nearest row only
+    std::erase_if(out, [&](const BruteForceRow& r) {
+        return !seen.emplace(m.row_info[r.row].model, m.row_info[r.row].view_index).second;
+    });
     return out;
+}
+
+TEST_F(RecognizerTest, ViewsWithOccludedCopiesAreAsNearAsTheirNearestSignature) {
+    const fs::path dir = temp_dir();
+    const std::string path = (dir / "occluded.sqlite").string();
+    {
+        esf::Database db(path, esf::OpenMode::kWrite);
+        esf::TrainingOptions options;
+        options.descriptor = "esf";
+        options.render.level = 0;
+        options.esf.samples = kSamples;
+        options.occlusions = 2;
+        options.seed = 5;
+        esf::train((root_ / "meshes").string(), db, options);
+    }
+    const esf::DescriptorMatrix m = esf::Database(path).load_descriptors();
+    for (const bool per_model : {false, true}) {
+        esf::RecognizerOptions options;
+        options.one_view_per_model = per_model;
+        options.k = 5;
+        const esf::Recognizer recognizer(path, options);
+        EXPECT_GT(recognizer.info().rows, recognizer.info().views);  // the copies
+        for (const auto& shape : kShapes) {
+            const esf::QueryDescriptor q =
+                recognizer.describe(held_out_view(shape, kHeldOut[1], 4));
+            ASSERT_TRUE(q.ok());
+            const esf::Classification c = recognizer.classify_descriptor(q.signatures);
+            std::vector<BruteForceRow> expected = brute_force(m, q.signatures, {});
+            if (per_model) {
+                std::set<std::uint32_t> seen;
+                std::erase_if(expected, [&](const BruteForceRow& r) {
+                    return !seen.insert(m.row_info[r.row].model).second;
+                });
+            }
+            ASSERT_EQ(c.neighbours.size(), std::min<std::size_t>(5, expected.size()));
+            for (std::size_t n = 0; n < c.neighbours.size(); ++n) {
+                const esf::DescriptorRow& row = m.row_info[expected[n].row];
+                EXPECT_EQ(c.neighbours[n].model_name, m.models[row.model].name) << n;
+                EXPECT_EQ(c.neighbours[n].view, row.view_index) << n;
+                EXPECT_NEAR(c.neighbours[n].distance, expected[n].distance,
+                            1e-9 * expected[n].distance)
+                    << n;
+            }
+        }
+    }
+    fs::remove_all(dir);
 }
 
 TEST_F(RecognizerTest, NeighboursEqualBruteForceL1) {

@@ -70,6 +70,7 @@ class RecognizerTest : public ::testing::Test {
         options.render.max_distance.reset();
         options.render.level = 1;
         options.esf.samples = kSamples;
+        options.occlusions = 0;  // the paper's one signature a view
         options.seed = 5;
         esf::train((root_ / "meshes").string(), db, options);
     }

@@ -97,6 +97,7 @@ inline TrainingOptions fast_options() {
     o.render.distance.reset();  // the small camera sees the small test shapes at fill 0.5
     o.render.max_distance.reset();
     o.esf.samples = 2000;
+    o.occlusions = 0;  // one signature a view; OccludedCopies... tests the copies
     o.seed = 7;
     o.threads = 2;
     return o;

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -100,6 +101,58 @@ TEST_F(TrainingRunTest, StoresEveryViewAndTheSettings) {
     const DescriptorMatrix matrix = db.load_descriptors();
     EXPECT_EQ(matrix.rows(), r.views);
     EXPECT_EQ(matrix.categories, (std::vector<std::string>{"ball", "box"}));
+}
+
+TEST_F(TrainingRunTest, OccludedCopiesAreMoreSignaturesOfTheirView) {
+    TrainingOptions o = fast_options();
+    Database plain(path("plain.sqlite"), OpenMode::kWrite);
+    train(root(), plain, o);
+    o.occlusions = 2;
+    {
+        Database occluded(path("occluded.sqlite"), OpenMode::kWrite);
+        const TrainingResult r = train(root(), occluded, o);
+        EXPECT_EQ(occluded.settings(), training_settings(o, false));
+        std::size_t copies = 0;
+        for (const auto& m : occluded.models()) {
+            const auto views = occluded.views(m.category, m.name);
+            const auto own = plain.views(m.category, m.name);
+            ASSERT_EQ(views.size(), own.size());
+            for (std::size_t i = 0; i < views.size(); ++i) {
+                ASSERT_EQ(views[i].skipped(), own[i].skipped());
+                if (views[i].skipped()) continue;
+                // The view's own signature first, as without copies; then up to two copies, each
+                // another ESF histogram (summing to one), each unlike the view's own.
+                const auto& d = views[i].descriptors;
+                ASSERT_EQ(d.size() % 640u, 0u);
+                ASSERT_GE(d.size(), 640u);
+                ASSERT_LE(d.size(), 3u * 640u);
+                EXPECT_TRUE(
+                    std::equal(own[i].descriptors.begin(), own[i].descriptors.end(), d.begin()));
+                for (std::size_t s = 640; s < d.size(); s += 640) {
+                    double sum = 0.0, differs = 0.0;
+                    for (std::size_t j = 0; j < 640; ++j) {
+                        sum += d[s + j];
+                        differs += std::abs(d[s + j] - d[j]);
+                    }
+                    EXPECT_NEAR(sum, 1.0, 1e-4);
+                    EXPECT_GT(differs, 0.01);
+                    ++copies;
+                }
+            }
+        }
+        EXPECT_GT(copies, r.views);  // most views have both copies (a copy needs min_points points)
+        EXPECT_EQ(occluded.load_descriptors().rows(), r.views + copies);
+    }
+
+    // Resuming with another number of copies is refused, naming the setting.
+    o.occlusions = 1;
+    Database again(path("occluded.sqlite"), OpenMode::kWrite);
+    EXPECT_CONTAINS(error_of<std::invalid_argument>([&] { train(root(), again, o); }),
+                    "occlusions 1 (database: 2)");
+    o.occlusions = kMaxTrainingOcclusions + 1;
+    Database fresh(path("fresh.sqlite"), OpenMode::kWrite);
+    EXPECT_CONTAINS(error_of<std::invalid_argument>([&] { train(root(), fresh, o); }),
+                    "occlusions must be at most");
 }
 
 TEST_F(TrainingRunTest, ResultDoesNotDependOnThreadCount) {

@@ -254,10 +254,11 @@ EvaluationReport evaluate_synthetic(const DescriptorMatrix& matrix,
 /// (weighted) L1 distance; the true class is the query's category. So databases trained with
 /// different cameras are compared on the same queries. `groups` names the group of each model
 /// of `matrix`, `query_groups` of each model of `queries` (models order; when empty, each model
-/// is its own group, matched by "category/name": leave-one-model-out). Both matrices must hold one
-/// signature per view of the same descriptor and dimension. Throws std::invalid_argument for k = 0,
-/// bad weights, group vectors of the wrong size, multi-signature or empty matrices, or matrices of
-/// other kinds.
+/// is its own group, matched by "category/name": leave-one-model-out). Both matrices must hold the
+/// same descriptor and dimension; a view of `matrix` may hold several signatures (occluded copies:
+/// its nearest counts), a view of `queries` one. Throws std::invalid_argument for k = 0, bad
+/// weights, group vectors of the wrong size, multi-signature queries, empty matrices, or matrices
+/// of other kinds.
 EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix, const DescriptorMatrix& queries,
                                    const std::vector<std::string>& query_groups,
                                    const SyntheticOptions& options = {});

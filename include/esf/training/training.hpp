@@ -153,6 +153,10 @@ inline constexpr double kTrainingMinDistanceFactor = 1.5;
 inline constexpr const char* kTrainingDescriptor = "esf-angles";
 /// Surface samples stored per model for verification.
 inline constexpr std::size_t kTrainingSurfacePoints = 2000;
+/// Occluded copies of each training view (TrainingOptions::occlusions; BENCHMARKS.md, "Training
+/// views with part hidden").
+inline constexpr std::size_t kTrainingOcclusions = 3;
+inline constexpr std::size_t kMaxTrainingOcclusions = 16;
 
 /// The render options training uses by default: RenderOptions with the cameras of the upper
 /// half of the view sphere (kTrainingMinElevation) at kTrainingCameraDistance to
@@ -183,6 +187,13 @@ struct TrainingOptions {
     std::uint64_t seed = 0;
     /// Views with fewer points (e.g. a thin object seen edge-on) are stored as skipped.
     std::size_t min_points = 50;
+    /// Each view is also described this many times with part of it hidden (occlude_view(), an
+    /// edge of occlusion_edge() from the view's seed; a copy left with fewer than min_points
+    /// points is not described): one more signature of the view each, so that a query's
+    /// distance to the view is the smallest to any of them. The view's own signature comes
+    /// first. Descriptors of several signatures a cloud (CVFH, OUR-CVFH) get none. 0: the view's
+    /// own signature alone. At most kMaxTrainingOcclusions.
+    std::size_t occlusions = kTrainingOcclusions;
     /// Samples of each model's surface stored for verification (sample_model_surface(), the
     /// model's seed); 0 stores none (recognition then verifies only with the meshes at hand).
     std::size_t surface_points = kTrainingSurfacePoints;
