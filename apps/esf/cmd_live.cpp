@@ -153,7 +153,7 @@ nlohmann::json frame_json(std::size_t frame, double time, std::size_t skipped,
             entry["class"] = t.class_name();
         else
             entry["class"] = nullptr;
-        // The fused class's best model (fusion "models"; null for "likelihood").
+        // The fused class's best model (fusion "frames" and "models"; null for "likelihood").
         if (t.has_class() && !t.classes.front().model.empty())
             entry["model"] = t.classes.front().model;
         else
@@ -302,10 +302,11 @@ void add_live_command(CLI::App& app) {
         "depth and RGB, 640 x 480), or from a recording (--recording DIR, or fakenect DIR esf "
         "live DB). Each frame is segmented and its objects classified as by esf scene; an "
         "object is the same across frames when it stands within --match-distance of where a "
-        "track last saw it, and each track fuses its frames (--fusion models: each frame's k "
-        "nearest models earn by how much nearer than the k-th they are, weighed by how far the "
-        "best class stands out, and the track names the class of the model that earned most; "
-        "likelihood: summed class log-likelihoods). Prints one "
+        "track last saw it, and each track fuses its frames (--fusion frames: a vote of the "
+        "classes its frames named, each verified by the best fit of its nearest models; models: "
+        "each frame's k nearest models earn by how much nearer than the k-th they are, weighed "
+        "by how far the best class stands out, and the track names the class of the model that "
+        "earned most; likelihood: summed class log-likelihoods). Prints one "
         "JSON line per processed frame on stdout: {frame, time, skipped, message, objects: "
         "[{class, confidence, track, centroid, size, points, and when verified model, pose, "
         "fit, verified}], tracks: [{id, class, model, confidence, frames, misses, position, and "

@@ -71,6 +71,47 @@ std::vector<FusedClass> fuse_models(const std::vector<Tally>& models) {
     return classes;
 }
 
+/// kFrameVotes: the classes of a track from its frames' votes, most votes first (ties: the
+/// larger best-model earnings of fuse_models(), then more nearest frames, then the name); a
+/// class's score is its votes, its confidence their share.
+template <typename Tally>
+std::vector<FusedClass> fuse_votes(const std::vector<std::pair<std::string, std::size_t>>& votes,
+                                   const std::vector<Tally>& models) {
+    const std::vector<FusedClass> by_models = fuse_models(models);
+    const auto of_models = [&](const std::string& name) {
+        return std::find_if(by_models.begin(), by_models.end(),
+                            [&](const FusedClass& f) { return f.class_name == name; });
+    };
+    std::size_t total = 0;
+    for (const auto& vote : votes) total += vote.second;
+    std::vector<std::pair<FusedClass, double>> classes;  // (class, its best model's earnings)
+    for (const auto& [name, count] : votes) {
+        FusedClass c{name,
+                     static_cast<double>(count),
+                     static_cast<double>(count) / static_cast<double>(total),
+                     {},
+                     0};
+        double earnings = 0.0;
+        if (const auto m = of_models(name); m != by_models.end()) {
+            c.model = m->model;
+            c.nearest = m->nearest;
+            earnings = m->score;
+        }
+        classes.emplace_back(std::move(c), earnings);
+    }
+    std::sort(classes.begin(), classes.end(), [](const auto& x, const auto& y) {
+        const FusedClass& a = x.first;
+        const FusedClass& b = y.first;
+        if (a.score != b.score) return a.score > b.score;
+        if (x.second != y.second) return x.second > y.second;
+        if (a.nearest != b.nearest) return a.nearest > b.nearest;
+        return a.class_name < b.class_name;
+    });
+    std::vector<FusedClass> out;
+    for (auto& c : classes) out.push_back(std::move(c.first));
+    return out;
+}
+
 /// A centroid dropped onto the table plane along its normal (the centroid without a plane).
 Eigen::Vector3f table_position(bool plane_found, const Plane& plane, const Eigen::Vector3f& c) {
     return plane_found ? Eigen::Vector3f(c - plane.height(c) * plane.normal) : c;
@@ -164,6 +205,7 @@ std::vector<TrackedObservation> scene_observations(const SceneRecognition& scene
         if (o.classified()) {
             t.evidence = class_evidence(o.classification);
             t.models = model_evidence(o.classification);
+            t.class_name = o.classification.class_name;
             const Classification& k = o.classification;
             if (k.verified && k.fit)
                 t.fit = FitEvidence{k.class_name, k.best_model, std::max(0.0, k.fit->score()),
@@ -212,7 +254,8 @@ std::vector<std::size_t> ObjectTracker::match(std::span<const Eigen::Vector3f> p
 }
 
 TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observations) {
-    const bool by_models = options_.fusion == FusionRule::kNearestModels;
+    const bool by_votes = options_.fusion == FusionRule::kFrameVotes;
+    const bool by_models = options_.fusion == FusionRule::kNearestModels || by_votes;
     // Checked (and scored) before anything changes, so that a refused frame leaves no trace.
     std::vector<std::vector<ModelScore>> scores(observations.size());
     for (std::size_t i = 0; i < observations.size(); ++i) {
@@ -251,7 +294,7 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
         track.last_frame = frames_;
         if (obs.fit) track.fit = obs.fit;
         if (by_models) {
-            if (scores[o].empty()) return;
+            if (scores[o].empty() && (!by_votes || obs.class_name.empty())) return;
             ++track.evidence_frames;
             std::vector<ModelTally>& tallies = sums_[t].models;
             for (std::size_t i = 0; i < scores[o].size(); ++i) {
@@ -266,7 +309,20 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
                 it->score += s.score;
                 it->nearest += i == 0;
             }
-            track.classes = fuse_models(tallies);
+            if (!by_votes) {
+                track.classes = fuse_models(tallies);
+                return;
+            }
+            auto& votes = sums_[t].votes;
+            if (!obs.class_name.empty()) {
+                auto v = std::find_if(votes.begin(), votes.end(),
+                                      [&](const auto& p) { return p.first == obs.class_name; });
+                if (v == votes.end())
+                    votes.emplace_back(obs.class_name, 1);
+                else
+                    ++v->second;
+            }
+            track.classes = fuse_votes(votes, tallies);
             return;
         }
         if (obs.evidence.empty()) return;

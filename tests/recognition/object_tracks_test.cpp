@@ -1,6 +1,6 @@
 // Tracks over hand-made frame sequences: association by position, birth, misses and end, and
-// the fused class under both rules (nearest models, class likelihoods), with hand-computed
-// numbers.
+// the fused class under every rule (the frames' votes, nearest models, class likelihoods), with
+// hand-computed numbers.
 
 #include "esf/recognition/object_tracks.hpp"
 
@@ -34,6 +34,13 @@ std::vector<ClassEvidence> says(const std::string& name, double p = 0.8) {
 /// A frame whose nearest model is of class `name` (at 1.0), the next of another class (at 2.0).
 std::vector<ModelEvidence> nearest(const std::string& name) {
     return {{name, name + "_1", 1.0}, {"other", "other_1", 2.0}};
+}
+
+/// A tracker that fuses by the nearest models (FusionRule::kNearestModels).
+esf::TrackingOptions by_models() {
+    esf::TrackingOptions o;
+    o.fusion = esf::FusionRule::kNearestModels;
+    return o;
 }
 
 /// A track at the origin for each frame's models, fused by the nearest models.
@@ -106,7 +113,7 @@ TEST(ObjectTracker, MatchSaysWhichTrackAnUpdateWillGive) {
 }
 
 TEST(ObjectTracker, ATrackKeepsItsLastVerifiedFit) {
-    esf::ObjectTracker tracker;
+    esf::ObjectTracker tracker(by_models());
     TrackedObservation verified = at(0.0f, 0.0f, {}, nearest("mug"));
     Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();
     pose(0, 3) = 0.25f;
@@ -144,7 +151,7 @@ TEST(ObjectTracker, NearestPairsFirst) {
 }
 
 TEST(ObjectTracker, ShortMissesSurviveLongOnesEnd) {
-    esf::TrackingOptions options;
+    esf::TrackingOptions options = by_models();
     options.max_misses = 2;
     esf::ObjectTracker tracker(options);
     const std::vector<TrackedObservation> seen = {at(0.0f, 0.0f, says("mug"), nearest("mug"))},
@@ -205,7 +212,7 @@ TEST(ObjectTracker, FusesLogLikelihoodsOverFrames) {
 }
 
 TEST(ObjectTracker, ObjectsWithoutClassAreSeenWithoutEvidence) {
-    esf::ObjectTracker tracker;  // nearest models
+    esf::ObjectTracker tracker(by_models());
     tracker.update(std::vector<TrackedObservation>{at(0, 0)});
     EXPECT_FALSE(tracker.tracks()[0].has_class());
     EXPECT_EQ(tracker.tracks()[0].class_name(), "");
@@ -316,7 +323,7 @@ TEST(ModelScores, BadDistancesAreRefused) {
 }
 
 TEST(ObjectTracker, FusesNearestModelsOverFrames) {
-    esf::ObjectTracker tracker;  // nearest models, the default
+    esf::ObjectTracker tracker(by_models());
     // Torn between bowl and mug: w = 1 - 1/1.1 = 1/11; b1 earns w (1 - 1/2) = 1/22, m1 earns
     // w (1 - 1.1/2) = 9/220, c1 (the k-th) nothing.
     const std::vector<ModelEvidence> torn_bowl = {
@@ -356,7 +363,7 @@ TEST(ObjectTracker, FusesNearestModelsOverFrames) {
 }
 
 TEST(ObjectTracker, NearestModelTiesGoToTheNearestFrames) {
-    esf::ObjectTracker tracker;
+    esf::ObjectTracker tracker(by_models());
     // Two classes at the nearest distance: every score is 0; mug's model was the nearest (first)
     // once, so mug comes before bowl (which the name would put first), and the confidences are
     // the shares of the nearest frames.
@@ -367,6 +374,59 @@ TEST(ObjectTracker, NearestModelTiesGoToTheNearestFrames) {
     EXPECT_DOUBLE_EQ(t.confidence(), 1.0);
     EXPECT_EQ(t.classes[1].class_name, "bowl");
     EXPECT_DOUBLE_EQ(t.classes[1].confidence, 0.0);
+}
+
+/// A frame that named `name` with these models.
+TrackedObservation named(const std::string& name, std::vector<ModelEvidence> models) {
+    TrackedObservation o = at(0, 0, {}, std::move(models));
+    o.class_name = name;
+    return o;
+}
+
+TEST(ObjectTracker, FusesTheFramesClassesByVote) {
+    esf::ObjectTracker tracker;  // frame votes, the default
+    // The sure mug frame would outweigh three torn bowl frames by the models' earnings (above);
+    // by votes the three frames that named bowl win, 3 to 1.
+    const std::vector<ModelEvidence> torn_bowl = {
+        {"bowl", "b1", 1.0}, {"mug", "m1", 1.1}, {"can", "c1", 2.0}};
+    const std::vector<ModelEvidence> sure_mug = {
+        {"mug", "m1", 1.0}, {"mug", "m2", 1.5}, {"bowl", "b1", 4.0}};
+    tracker.update(std::vector<TrackedObservation>{named("mug", sure_mug)});
+    EXPECT_EQ(tracker.tracks()[0].class_name(), "mug");
+    EXPECT_EQ(tracker.tracks()[0].classes[0].model, "m1");
+    for (int i = 0; i < 3; ++i)
+        tracker.update(std::vector<TrackedObservation>{named("bowl", torn_bowl)});
+    const esf::ObjectTrack& t = tracker.tracks()[0];
+    EXPECT_EQ(t.evidence_frames, 4u);
+    ASSERT_EQ(t.classes.size(), 2u);  // the classes frames named
+    EXPECT_EQ(t.class_name(), "bowl");
+    EXPECT_EQ(t.classes[0].score, 3.0);
+    EXPECT_DOUBLE_EQ(t.confidence(), 0.75);
+    EXPECT_EQ(t.classes[0].model, "b1");
+    EXPECT_EQ(t.classes[0].nearest, 3u);
+    EXPECT_EQ(t.classes[1].class_name, "mug");
+    EXPECT_DOUBLE_EQ(t.classes[1].confidence, 0.25);
+    // A frame that named the class verification chose, though its nearest model is a can's.
+    tracker.update(std::vector<TrackedObservation>{named("mug", nearest("can"))});
+    EXPECT_EQ(tracker.tracks()[0].classes[1].score, 2.0);
+}
+
+TEST(ObjectTracker, TiedVotesGoToTheLargerEarnings) {
+    esf::ObjectTracker tracker;
+    // One vote each; mug's model earned more (a sure frame), so mug comes first though the
+    // bowl frame came first and "bowl" comes first by name.
+    tracker.update(std::vector<TrackedObservation>{
+        named("bowl", {{"bowl", "b1", 1.0}, {"mug", "m1", 1.1}, {"can", "c1", 2.0}})});
+    tracker.update(std::vector<TrackedObservation>{
+        named("mug", {{"mug", "m1", 1.0}, {"mug", "m2", 1.5}, {"bowl", "b1", 4.0}})});
+    const esf::ObjectTrack& t = tracker.tracks()[0];
+    EXPECT_EQ(t.class_name(), "mug");
+    EXPECT_DOUBLE_EQ(t.confidence(), 0.5);
+    // A frame without a class is seen without a vote.
+    tracker.update(std::vector<TrackedObservation>{at(0, 0)});
+    EXPECT_EQ(tracker.tracks()[0].frames, 3u);
+    EXPECT_EQ(tracker.tracks()[0].evidence_frames, 2u);
+    EXPECT_EQ(tracker.tracks()[0].class_name(), "mug");
 }
 
 TEST(ObjectTracker, ARefusedFrameLeavesNoTrace) {
@@ -384,10 +444,11 @@ TEST(ObjectTracker, ARefusedFrameLeavesNoTrace) {
 
 TEST(FusionRule, Names) {
     EXPECT_STREQ(esf::to_string(esf::FusionRule::kNearestModels), "models");
+    EXPECT_EQ(esf::parse_enum<esf::FusionRule>("frames"), esf::FusionRule::kFrameVotes);
     EXPECT_EQ(esf::parse_enum<esf::FusionRule>("likelihood"), esf::FusionRule::kClassLikelihood);
     EXPECT_CONTAINS(esf::test::error_of([] { esf::parse_enum<esf::FusionRule>("votes"); }),
                     "fusion rule");
-    EXPECT_EQ(esf::TrackingOptions{}.fusion, esf::FusionRule::kNearestModels);
+    EXPECT_EQ(esf::TrackingOptions{}.fusion, esf::FusionRule::kFrameVotes);
 }
 
 TEST(ObjectTracker, BadOptionsAndPositionsAreRefused) {
