@@ -435,6 +435,15 @@ TEST(EvaluateSynthetic, RejectsBadInput) {
     EXPECT_THROW(esf::evaluate_synthetic(esf::DescriptorMatrix{}), std::invalid_argument);
 }
 
+/// L1 distance between row `a` of `x` and row `b` of `y`.
+double row_l1(const esf::DescriptorMatrix& x, std::size_t a, const esf::DescriptorMatrix& y,
+              std::size_t b) {
+    double d = 0.0;
+    for (std::size_t i = 0; i < x.row(a).size(); ++i)
+        d += std::abs(static_cast<double>(x.row(a)[i]) - static_cast<double>(y.row(b)[i]));
+    return d;
+}
+
 TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
     // The same models (c<i>/m<j>), other views: each query's own model is left out.
     const esf::DescriptorMatrix db = random_matrix(3, 4, 5, 24, 1, 7);
@@ -444,7 +453,6 @@ TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
     options.threads = 2;
     const EvaluationReport report = esf::evaluate_held_out(db, queries, {}, options);
     ASSERT_EQ(report.queries.size(), queries.rows());
-    const std::size_t dim = 24;
     for (std::size_t q = 0; q < queries.rows(); ++q) {
         const esf::DescriptorRow& qr = queries.row_info[q];
         std::vector<std::pair<double, std::size_t>> all;
@@ -453,10 +461,7 @@ TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
             if (dr.category == qr.category &&
                 db.models[dr.model].name == queries.models[qr.model].name)
                 continue;
-            double d = 0.0;
-            for (std::size_t i = 0; i < dim; ++i)
-                d += std::abs(static_cast<double>(queries.data[q * dim + i]) -
-                              static_cast<double>(db.data[r * dim + i]));
+            const double d = row_l1(queries, q, db, r);
             all.emplace_back(d, r);
         }
         std::sort(all.begin(), all.end());
@@ -492,7 +497,6 @@ TEST(EvaluateHeldOut, AViewOfSeveralSignaturesIsAsNearAsItsNearest) {
     options.k = 3;
     const EvaluationReport report = esf::evaluate_held_out(db, queries, {}, options);
     ASSERT_EQ(report.queries.size(), queries.rows());
-    const std::size_t dim = 24;
     for (std::size_t q = 0; q < queries.rows(); ++q) {
         const esf::DescriptorRow& qr = queries.row_info[q];
         // Brute force: each view of another model at its nearest signature.
@@ -502,10 +506,7 @@ TEST(EvaluateHeldOut, AViewOfSeveralSignaturesIsAsNearAsItsNearest) {
             if (dr.category == qr.category &&
                 db.models[dr.model].name == queries.models[qr.model].name)
                 continue;
-            double d = 0.0;
-            for (std::size_t i = 0; i < dim; ++i)
-                d += std::abs(static_cast<double>(queries.data[q * dim + i]) -
-                              static_cast<double>(db.data[r * dim + i]));
+            const double d = row_l1(queries, q, db, r);
             const auto key = std::make_pair(dr.model, dr.view_index);
             const auto it = views.find(key);
             views[key] = it == views.end() ? d : std::min(it->second, d);

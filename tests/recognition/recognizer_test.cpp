@@ -254,6 +254,19 @@ TEST_F(RecognizerTest, EverySizeIsFreeWhileCandidatesCompeteAndThePoseIsMetric) 
     EXPECT_GT(free.fit.inliers, fixed.fit.inliers + 0.05);
 }
 
+/// Trains the paper's ESF for the meshes of `root`/meshes into `db_path` (seed 5).
+void train_esf(const fs::path& root, const std::string& db_path, int level,
+               std::size_t occlusions) {
+    esf::Database db(db_path, esf::OpenMode::kWrite);
+    esf::TrainingOptions options;
+    options.descriptor = "esf";
+    options.render.level = level;
+    options.esf.samples = kSamples;
+    options.occlusions = occlusions;
+    options.seed = 5;
+    esf::train((root / "meshes").string(), db, options);
+}
+
 // Look-alike models of one class: a can and the same can a fifth larger. With every size free
 // both explain a view of the smaller one about equally; the one that needs no resizing names the
 // model and the pose, and the class stays can.
@@ -269,15 +282,7 @@ TEST(RecognizerLookAlikes, TheModelThatNeedsTheLeastResizingNamesTheModel) {
     write("can", "large", esf::test::standing_cylinder(0.042, 0.132));
     write("box", "carton", esf::test::standing_box(0.09, 0.06, 0.2));
     const std::string db_path = (root / "cans.sqlite").string();
-    {
-        esf::Database db(db_path, esf::OpenMode::kWrite);
-        esf::TrainingOptions options;
-        options.descriptor = "esf";
-        options.render.level = 1;
-        options.esf.samples = kSamples;
-        options.seed = 5;
-        esf::train((root / "meshes").string(), db, options);
-    }
+    train_esf(root, db_path, 1, esf::kTrainingOcclusions);
     esf::RenderOptions render;
     render.level = 0;
     render.seed = 99;
@@ -401,16 +406,7 @@ std::vector<BruteForceRow> brute_force(const esf::DescriptorMatrix& m, std::span
 TEST_F(RecognizerTest, ViewsWithOccludedCopiesAreAsNearAsTheirNearestSignature) {
     const fs::path dir = temp_dir();
     const std::string path = (dir / "occluded.sqlite").string();
-    {
-        esf::Database db(path, esf::OpenMode::kWrite);
-        esf::TrainingOptions options;
-        options.descriptor = "esf";
-        options.render.level = 0;
-        options.esf.samples = kSamples;
-        options.occlusions = 2;
-        options.seed = 5;
-        esf::train((root_ / "meshes").string(), db, options);
-    }
+    train_esf(root_, path, 0, 2);
     const esf::DescriptorMatrix m = esf::Database(path).load_descriptors();
     for (const bool per_model : {false, true}) {
         esf::RecognizerOptions options;
