@@ -274,9 +274,9 @@ void describe_view(Job& job, std::size_t v, const TrainingOptions& options,
     const std::size_t copies = descriptor->info().multi_signature ? 0 : options.occlusions;
     for (std::uint32_t copy = 0; copy < copies; ++copy) {
         const OcclusionEdge edge = occlusion_edge(view_seed(job.seed, rendered.index), copy);
-        const Points hidden = occlude_view(rendered.points, edge.angle, edge.fraction);
-        if (hidden.size() < options.min_points) continue;
         try {
+            const Points hidden = occlude_view(rendered.points, edge.angle, edge.fraction);
+            if (hidden.size() < options.min_points) continue;
             for (const Signature& s : descriptor->compute(hidden))
                 if (s.size() == dim)
                     view.descriptors.insert(view.descriptors.end(), s.begin(), s.end());
