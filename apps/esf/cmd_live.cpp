@@ -351,8 +351,9 @@ void add_live_command(CLI::App& app) {
         "Verify every frame afresh instead of first fitting each track's last verified model "
         "from where it stood");
     add_enum_option(*cmd, "--fusion", args->tracking.fusion,
-                    "How a track fuses its frames: models (the nearest models' earnings summed "
-                    "over the frames) or likelihood (summed class log-likelihoods)");
+                    "How a track fuses its frames: frames (a vote of the classes its frames "
+                    "named), models (the nearest models' earnings summed over the frames) or "
+                    "likelihood (summed class log-likelihoods)");
     add_segmentation_options(*cmd, args->input);
     cmd->callback([args] { run_live(*args); });
 }
