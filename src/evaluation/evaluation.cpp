@@ -385,9 +385,7 @@ LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::stri
             throw std::invalid_argument(what + ": row " + std::to_string(r) + " has model " +
                                         std::to_string(row.model) + " of " +
                                         std::to_string(matrix.models.size()));
-        const bool same_view = r > 0 && matrix.row_info[r - 1].model == row.model &&
-                               matrix.row_info[r - 1].view_index == row.view_index;
-        if (same_view) {
+        if (continues_view(matrix, r)) {
             setup.multi_signature = true;
         } else {
             setup.view_first_row.push_back(r);
@@ -412,8 +410,12 @@ LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::stri
 
 bool has_occluded_copies(const DescriptorMatrix& matrix) {
     const std::vector<std::string> names = descriptor_names();
-    return std::find(names.begin(), names.end(), matrix.kind.name) != names.end() &&
-           !descriptor_info(matrix.kind.name).multi_signature;
+    if (std::find(names.begin(), names.end(), matrix.kind.name) == names.end() ||
+        descriptor_info(matrix.kind.name).multi_signature)
+        return false;
+    for (std::size_t r = 1; r < matrix.rows(); ++r)
+        if (continues_view(matrix, r)) return true;
+    return false;
 }
 
 DescriptorMatrix own_view_signatures(const DescriptorMatrix& matrix) {
@@ -423,11 +425,8 @@ DescriptorMatrix own_view_signatures(const DescriptorMatrix& matrix) {
     out.models = matrix.models;
     const auto dim = static_cast<std::size_t>(matrix.kind.dimension);
     for (std::size_t r = 0; r < matrix.rows(); ++r) {
-        const DescriptorRow& row = matrix.row_info[r];
-        if (r > 0 && matrix.row_info[r - 1].model == row.model &&
-            matrix.row_info[r - 1].view_index == row.view_index)
-            continue;
-        out.row_info.push_back(row);
+        if (continues_view(matrix, r)) continue;
+        out.row_info.push_back(matrix.row_info[r]);
         out.data.insert(out.data.end(), matrix.data.begin() + static_cast<std::ptrdiff_t>(r * dim),
                         matrix.data.begin() + static_cast<std::ptrdiff_t>((r + 1) * dim));
     }
@@ -585,9 +584,7 @@ EvaluationReport evaluate_held_out(const DescriptorMatrix& matrix,
     const detail::LomoSetup setup = detail::lomo_setup(matrix, options.groups, what);
     bool multi_signature_queries = false;
     for (std::size_t r = 1; r < queries.rows(); ++r)
-        multi_signature_queries |=
-            queries.row_info[r - 1].model == queries.row_info[r].model &&
-            queries.row_info[r - 1].view_index == queries.row_info[r].view_index;
+        multi_signature_queries |= detail::continues_view(queries, r);
     if (multi_signature_queries || queries.rows() == 0)
         throw std::invalid_argument(what + ": needs queries of one signature per view, and some");
     const KnnIndex index =

@@ -36,8 +36,14 @@ struct LomoSetup {
 LomoSetup lomo_setup(const DescriptorMatrix& matrix, const std::vector<std::string>& groups,
                      const std::string& what);
 
-/// Whether the views of `matrix` that hold several rows hold occluded copies after their own
-/// signature: the matrix's descriptor gives one signature a cloud.
+/// Whether row `r` of `matrix` is another signature of the view of row r - 1.
+inline bool continues_view(const DescriptorMatrix& matrix, std::size_t r) {
+    return r > 0 && matrix.row_info[r - 1].model == matrix.row_info[r].model &&
+           matrix.row_info[r - 1].view_index == matrix.row_info[r].view_index;
+}
+
+/// Whether some view of `matrix` holds occluded copies after its own signature: it holds
+/// several rows, and the matrix's descriptor gives one signature a cloud.
 bool has_occluded_copies(const DescriptorMatrix& matrix);
 
 /// `matrix` with the first row of each view alone (its own signature, the copies dropped).

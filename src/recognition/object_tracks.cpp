@@ -78,10 +78,6 @@ template <typename Tally>
 std::vector<FusedClass> fuse_votes(const std::vector<std::pair<std::string, std::size_t>>& votes,
                                    const std::vector<Tally>& models) {
     const std::vector<FusedClass> by_models = fuse_models(models);
-    const auto of_models = [&](const std::string& name) {
-        return std::find_if(by_models.begin(), by_models.end(),
-                            [&](const FusedClass& f) { return f.class_name == name; });
-    };
     std::size_t total = 0;
     for (const auto& vote : votes) total += vote.second;
     std::vector<std::pair<FusedClass, double>> classes;  // (class, its best model's earnings)
@@ -92,7 +88,9 @@ std::vector<FusedClass> fuse_votes(const std::vector<std::pair<std::string, std:
                      {},
                      0};
         double earnings = 0.0;
-        if (const auto m = of_models(name); m != by_models.end()) {
+        const auto m = std::find_if(by_models.begin(), by_models.end(),
+                                    [&](const FusedClass& f) { return f.class_name == name; });
+        if (m != by_models.end()) {
             c.model = m->model;
             c.nearest = m->nearest;
             earnings = m->score;
@@ -254,15 +252,16 @@ std::vector<std::size_t> ObjectTracker::match(std::span<const Eigen::Vector3f> p
 }
 
 TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observations) {
+    // The frames' votes break their ties by the nearest models' earnings: both tally them.
     const bool by_votes = options_.fusion == FusionRule::kFrameVotes;
-    const bool by_models = options_.fusion == FusionRule::kNearestModels || by_votes;
+    const bool tally_models = options_.fusion == FusionRule::kNearestModels || by_votes;
     // Checked (and scored) before anything changes, so that a refused frame leaves no trace.
     std::vector<std::vector<ModelScore>> scores(observations.size());
     for (std::size_t i = 0; i < observations.size(); ++i) {
         if (!observations[i].position.allFinite())
             throw std::invalid_argument("tracked object " + std::to_string(i) +
                                         " has a non-finite position");
-        if (!by_models) continue;
+        if (!tally_models) continue;
         try {
             scores[i] = model_scores(observations[i].models);
         } catch (const std::invalid_argument& e) {
@@ -293,7 +292,7 @@ TrackUpdate ObjectTracker::update(std::span<const TrackedObservation> observatio
         track.misses = 0;
         track.last_frame = frames_;
         if (obs.fit) track.fit = obs.fit;
-        if (by_models) {
+        if (tally_models) {
             if (scores[o].empty() && (!by_votes || obs.class_name.empty())) return;
             ++track.evidence_frames;
             std::vector<ModelTally>& tallies = sums_[t].models;
