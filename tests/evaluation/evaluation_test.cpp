@@ -435,6 +435,13 @@ TEST(EvaluateSynthetic, RejectsBadInput) {
     EXPECT_THROW(esf::evaluate_synthetic(esf::DescriptorMatrix{}), std::invalid_argument);
 }
 
+/// Whether row `a` of `x` and row `b` of `y` are of one model (category and name).
+bool same_model(const esf::DescriptorMatrix& x, std::size_t a, const esf::DescriptorMatrix& y,
+                std::size_t b) {
+    return x.categories[x.row_info[a].category] == y.categories[y.row_info[b].category] &&
+           x.models[x.row_info[a].model].name == y.models[y.row_info[b].model].name;
+}
+
 /// L1 distance between row `a` of `x` and row `b` of `y`.
 double row_l1(const esf::DescriptorMatrix& x, std::size_t a, const esf::DescriptorMatrix& y,
               std::size_t b) {
@@ -457,10 +464,7 @@ TEST(EvaluateHeldOut, EqualsBruteForceOverTheOtherModels) {
         const esf::DescriptorRow& qr = queries.row_info[q];
         std::vector<std::pair<double, std::size_t>> all;
         for (std::size_t r = 0; r < db.rows(); ++r) {
-            const esf::DescriptorRow& dr = db.row_info[r];
-            if (dr.category == qr.category &&
-                db.models[dr.model].name == queries.models[qr.model].name)
-                continue;
+            if (same_model(queries, q, db, r)) continue;  // left out
             const double d = row_l1(queries, q, db, r);
             all.emplace_back(d, r);
         }
@@ -498,14 +502,11 @@ TEST(EvaluateHeldOut, AViewOfSeveralSignaturesIsAsNearAsItsNearest) {
     const EvaluationReport report = esf::evaluate_held_out(db, queries, {}, options);
     ASSERT_EQ(report.queries.size(), queries.rows());
     for (std::size_t q = 0; q < queries.rows(); ++q) {
-        const esf::DescriptorRow& qr = queries.row_info[q];
         // Brute force: each view of another model at its nearest signature.
         std::map<std::pair<std::uint32_t, int>, double> views;
         for (std::size_t r = 0; r < db.rows(); ++r) {
+            if (same_model(queries, q, db, r)) continue;  // left out
             const esf::DescriptorRow& dr = db.row_info[r];
-            if (dr.category == qr.category &&
-                db.models[dr.model].name == queries.models[qr.model].name)
-                continue;
             const double d = row_l1(queries, q, db, r);
             const auto key = std::make_pair(dr.model, dr.view_index);
             const auto it = views.find(key);
