@@ -667,6 +667,37 @@ SceneRecognition Recognizer::recognize(SegmentationResult segmentation, const Po
     return out;
 }
 
+void Recognizer::adopt_part_model(Classification& merged, const Classification& part,
+                                  const PreparedObservation& observation, double bar) const {
+    if (!part.verified || part.best_model_id < 0) return;
+    const VerificationOptions& o = impl_->options.verification;
+    const ModelInfo& model = impl_->models.at(static_cast<std::size_t>(part.best_model_id));
+    const bool guessed = model.scale != 1.0;  // a size the database guessed
+    // The part's pose less the database's scale: the surface's own frame -> camera.
+    Eigen::Matrix4d start = part.pose.cast<double>();
+    start.topLeftCorner<3, 3>() /= model.scale;
+    const PreparedModel& surface = *impl_->surface(part.best_model_id);
+    // A fit that cannot beat the union's own verified fit, or the bar, changes nothing: it is
+    // dropped as soon as that is sure.
+    const double must_beat =
+        merged.verified && merged.fit ? std::max(bar, merged.fit->score()) : bar;
+    PoseFit fit = fit_model(surface, start, observation, o, o.every_size_free || guessed,
+                            FitStart::kCameraPose, must_beat);
+    if (!fit.verified || fit.abandoned) return;
+    // A model of known size is given at its own size, as verify() gives it.
+    if (o.every_size_free && !guessed)
+        fit = fit_model(surface, fit.model_to_camera, observation, o, false, FitStart::kCameraPose);
+    if (!fit.verified) return;
+    if (merged.verified && merged.fit && merged.fit->score() >= fit.fit.score()) return;
+    Classification adopted = part;
+    Eigen::Matrix4d scaled = fit.model_to_camera;
+    scaled.topLeftCorner<3, 3>() *= model.scale;
+    adopted.pose = scaled.cast<float>();
+    adopted.fit = fit.fit;
+    adopted.verified = true;
+    merged = std::move(adopted);
+}
+
 void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) const {
     // Parts meet where a pixel of one, up to 6 pixels on along its row or column from a pixel of
     // the other, is within this of it (a thin stem or handle between them may be lost).
@@ -817,15 +848,24 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
             if (!d.ok()) return;
             merged.classification = classify_descriptor(d.signatures);
             verify(merged.classification, Observation{merged.cluster.points, &frame});
+            // Each part's own verified model, from where it stood: the model that explains the
+            // larger part often explains the smaller one too (a mug's body and its handle)
+            // when the union's nearest views hold no such model.
+            const PreparedObservation prepared(Observation{merged.cluster.points, &frame},
+                                               impl_->options.verification.camera);
+            const double na = static_cast<double>(a.cluster.points.size());
+            const double nb = static_cast<double>(b.cluster.points.size());
+            // What the union's fit must exceed for the pair to become one object.
+            const double bar =
+                (na * a.classification.fit->score() + nb * b.classification.fit->score()) /
+                (na + nb);
+            for (const RecognizedObject* part : {&a, &b})
+                adopt_part_model(merged.classification, part->classification, prepared, bar);
             const std::optional<FitScore>& fit = merged.classification.fit;
             if (!fit || !merged.classification.verified ||
                 fit->inliers < impl_->options.merge_min_inliers)
                 return;
-            const double na = static_cast<double>(a.cluster.points.size());
-            const double nb = static_cast<double>(b.cluster.points.size());
-            pair.gain = fit->score() -
-                        (na * a.classification.fit->score() + nb * b.classification.fit->score()) /
-                            (na + nb);
+            pair.gain = fit->score() - bar;
             pair.fits = pair.gain >= 0.0;
         });
         std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 #include <string>
@@ -129,6 +130,35 @@ TEST_F(RecognizerTest, PartsThatOneModelFitsBetterBecomeOneObject) {
         options.merge_min_inliers = bad;
         EXPECT_CONTAINS(MESSAGE_OF(std::invalid_argument, esf::Recognizer(db_path_, options)),
                         "merge_min_inliers");
+    }
+}
+
+TEST_F(RecognizerTest, APartsOwnModelMayExplainTheUnion) {
+    // The mug cut at its handle, seen from two sides where the union's nearest view starts its
+    // fit too far off to explain both parts: the body's own fitted mug, moved from where it
+    // stood, explains them, and they become one object.
+    const esf::Mesh& mug = meshes_["mug"];
+    for (const double azimuth : {std::numbers::pi / 3, 3 * std::numbers::pi / 2}) {
+        const Eigen::Isometry3d camera =
+            esf::look_at({0.7 * std::cos(azimuth), 0.7 * std::sin(azimuth), 0.45}, {0, 0, 0.05});
+        const esf::PointCloud scene = table_scene({{&mug, Eigen::Isometry3d::Identity()}}, camera);
+        esf::RecognizerOptions options;
+        options.merge_parts = false;
+        const esf::SceneRecognition parts =
+            esf::Recognizer(db_path_, options).recognize_scene(scene, {});
+        ASSERT_EQ(parts.objects.size(), 2u) << "the mug is no longer cut at its handle";
+        options.merge_parts = true;
+        const esf::SceneRecognition result =
+            esf::Recognizer(db_path_, options).recognize_scene(scene, {});
+        ASSERT_EQ(result.objects.size(), 1u) << "azimuth " << azimuth;
+        const esf::RecognizedObject& o = result.objects.front();
+        EXPECT_EQ(o.cluster.points.size(),
+                  parts.objects[0].cluster.points.size() + parts.objects[1].cluster.points.size());
+        const esf::Classification& c = o.classification;
+        EXPECT_EQ(c.class_name, "mug");
+        EXPECT_TRUE(c.verified);
+        ASSERT_TRUE(c.fit.has_value());
+        EXPECT_GE(c.fit->inliers, options.merge_min_inliers);
     }
 }
 

@@ -77,8 +77,10 @@ struct RecognizerOptions {
     /// merge_min_inliers of their points and scores no less than the point-weighted mean of their
     /// own fits: an object that segmentation cut at a concave joint or a thin stem (a mug's
     /// handle, a screwdriver's shaft, a figurine's limbs, a wine glass's foot). Repeated while
-    /// pairs merge. Chosen on generated scenes and real fold 0 (BENCHMARKS.md). false: the
-    /// objects stay as segmented.
+    /// pairs merge. The models fitted to a pair: the nearest models of its own descriptor (as
+    /// any object's), and each part's verified model from the part's pose (the model of a mug's
+    /// body fits its handle too where the pair's nearest views start too far off). Chosen on
+    /// generated scenes and real fold 0 (BENCHMARKS.md). false: the objects stay as segmented.
     bool merge_parts = true;
     double merge_min_inliers = 0.7;  ///< [0, 1]
 };
@@ -275,6 +277,11 @@ class Recognizer {
     void verify_objects(SceneRecognition& scene, const PointCloud* frame,
                         std::span<const std::optional<PriorFit>> priors) const;
     void merge_parts(SceneRecognition& scene, const PointCloud& frame) const;  // merge_parts
+    /// merge_parts: `part`'s verified model fitted to the union from the part's pose; when it
+    /// is verified and scores more than `merged`'s fit (or `merged` has none verified) and more
+    /// than `bar`, `merged` becomes the part's classification with that pose and fit.
+    void adopt_part_model(Classification& merged, const Classification& part,
+                          const PreparedObservation& observation, double bar) const;
 
     struct Impl;
     std::unique_ptr<Impl> impl_;
