@@ -4,10 +4,13 @@ each object, whether it was found as one cluster, named right and posed right (A
 and in run B; the objects each run got that the other did not, and a two-sided sign test of
 those changes (the chance of a split at least this uneven if neither run were better).
 
-    scenes_paired.py A.json[,A2.json...] B.json[,B2.json...]
+    scenes_paired.py A.json[,A2.json...] B.json[,B2.json...] [A'.json[,...] B'.json[,...] ...]
 
 Several files on a side (comma-separated, e.g. the folds of a proving ground) are taken together;
 objects are matched by scene file and object id, and both sides must hold the same objects.
+Further pairs (e.g. the same two settings trained with other seeds) are pooled: each pair's
+objects count once per pair, so a rule judged over three training seeds is tested on all their
+changes together.
 """
 import json
 import math
@@ -32,19 +35,26 @@ def sign_test(gained: int, lost: int) -> float:
 
 
 def main() -> int:
-    if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
+    args = sys.argv[1:]
+    if not args or args[0] in ("-h", "--help") or len(args) % 2 != 0:
         print(__doc__.strip())
-        return 0 if len(sys.argv) == 2 else 1
-    a, b = load(sys.argv[1]), load(sys.argv[2])
-    if a.keys() != b.keys():
-        print(f"the runs hold different objects ({len(a)} and {len(b)})", file=sys.stderr)
-        return 2
+        return 0 if args and args[0] in ("-h", "--help") else 1
+    a, b = {}, {}
+    for pair in range(len(args) // 2):
+        run_a, run_b = load(args[2 * pair]), load(args[2 * pair + 1])
+        if run_a.keys() != run_b.keys():
+            print(f"pair {pair + 1}: the runs hold different objects ({len(run_a)} and "
+                  f"{len(run_b)})", file=sys.stderr)
+            return 2
+        a.update({(pair, *k): o for k, o in run_a.items()})
+        b.update({(pair, *k): o for k, o in run_b.items()})
     measures = {
         "found": lambda o: o["outcome"] == "found",
         "named right": lambda o: bool(o["correct"]),
         "posed right": lambda o: bool(o.get("pose_correct")),
     }
-    print(f"{len(a)} objects")
+    pairs = len(args) // 2
+    print(f"{len(a)} objects" + (f" in {pairs} pairs of runs" if pairs > 1 else ""))
     for name, right in measures.items():
         gained = sum(1 for k in a if not right(a[k]) and right(b[k]))
         lost = sum(1 for k in a if right(a[k]) and not right(b[k]))
