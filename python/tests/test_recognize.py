@@ -144,6 +144,10 @@ def test_render_and_scene(meshes, database):
         if o.classification is not None and o.classification.fit is not None:
             r = o.pose[:3, :3]
             np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-4)
+    # Two-way ICP: the same clusters, each fitted model still named by its fit.
+    two_way = esf.Recognizer(database, two_way_icp=True).scene(scene)
+    assert [len(o.points) for o in two_way] == [len(o.points) for o in objects]
+    assert any(o.classification is not None and o.classification.fit is not None for o in two_way)
 
 
 def test_train_progress_interrupt_and_resume(tmp_path, meshes):

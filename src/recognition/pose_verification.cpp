@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <span>
@@ -342,18 +341,16 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         Eigen::Matrix3d arm_outer = Eigen::Matrix3d::Zero();
         Eigen::Vector3d arm_sum = Eigen::Vector3d::Zero(), arm_cross_d = Eigen::Vector3d::Zero(),
                         d_sum = Eigen::Vector3d::Zero();
-        const std::size_t step = std::max<std::size_t>(1, points.size() / kIcpSamples);
-        for (std::size_t i = 0; i < points.size(); i += step) {
-            Eigen::Vector3d target;
-            if (!pair(points[i], indices[i], target, radius)) continue;
-            const Eigen::Vector3d arm = points[i] - pivot;
-            const Eigen::Vector3d d = target - points[i];
+        // A pair: a model sample (`arm` about the pivot, unit normal `n`) and its offset `d` to
+        // the object point it is paired with.
+        const auto add_pair = [&](const Eigen::Vector3d& arm, const Eigen::Vector3d& n,
+                                  const Eigen::Vector3d& d) {
             Eigen::Matrix<double, 7, 1> row;
-            row.head<3>() = arm.cross(normals[i]);
-            row.segment<3>(3) = normals[i];
-            row(6) = arm.dot(normals[i]);
+            row.head<3>() = arm.cross(n);
+            row.segment<3>(3) = n;
+            row(6) = arm.dot(n);
             ata.noalias() += row * row.transpose();  // inlined: Eigen's rankUpdate is a call
-            atb += row * d.dot(normals[i]);
+            atb += row * d.dot(n);
             arm_squared += arm.squaredNorm();
             arm_outer.noalias() += arm * arm.transpose();
             arm_sum += arm;
@@ -361,6 +358,38 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             d_sum += d;
             arm_dot_d += arm.dot(d);
             ++pairs;
+        };
+        const std::size_t step = std::max<std::size_t>(1, points.size() / kIcpSamples);
+        for (std::size_t i = 0; i < points.size(); i += step) {
+            Eigen::Vector3d target;
+            if (!pair(points[i], indices[i], target, radius)) continue;
+            add_pair(points[i] - pivot, normals[i], target - points[i]);
+        }
+        // Two-way: object points paired with their nearest camera-facing model sample too, so
+        // that the model is drawn to cover the object as well as to lie on it (the one-way
+        // pairs alone pull a model's samples beyond a cut or hidden edge in, and a free size
+        // shrinks towards its bound).
+        if (options.two_way) {
+            const Eigen::Matrix3d r = pose.topLeftCorner<3, 3>();
+            const Eigen::Matrix3d r_t = r.transpose() / (scale * scale);
+            const Eigen::Vector3d t = pose.topRightCorner<3, 1>();
+            const NearestPoints& tree = model.impl_->tree;
+            const double reach = radius / scale;
+            const std::size_t n = object.points().size();
+            const std::size_t object_step = std::max<std::size_t>(1, n / kIcpSamples);
+            for (std::size_t k = 0; k < n; k += object_step) {
+                const Eigen::Vector3d q = object.points()[k].cast<double>();
+                const Eigen::Vector3d local = r_t * (q - t);
+                float squared = 0.0f;
+                std::size_t m = 0;
+                if (!tree.nearest_within(local.cast<float>(), static_cast<float>(reach * reach),
+                                         kNoMatch, m, squared))
+                    continue;
+                const Eigen::Vector3d p = r * surface.points[m].cast<double>() + t;
+                Eigen::Vector3d nrm = r * surface.normals[m].cast<double>();
+                if (nrm.dot(p) >= 0.0) continue;  // a sample facing away
+                add_pair(p - pivot, nrm.normalized(), q - p);
+            }
         }
         if (pairs < 7) break;
         {
