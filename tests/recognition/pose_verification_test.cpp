@@ -36,6 +36,17 @@ esf::Points render(const esf::Mesh& mesh, const Eigen::Isometry3d& pose) {
     return esf::MeshRenderer(mesh, options).render_pose(pose, 0);
 }
 
+// The matched view's rotation, 10 degrees off the truth, from a camera looking straight at the
+// model.
+Eigen::Matrix4d view_ten_degrees_off(const Eigen::Isometry3d& truth) {
+    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
+    view.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(10.0 * std::numbers::pi / 180.0, Eigen::Vector3d(1, 1, 0).normalized())
+            .toRotationMatrix() *
+        truth.linear();
+    return view;
+}
+
 double rotation_error_deg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
     return Eigen::AngleAxisd(a.transpose() * b).angle() * 180.0 / std::numbers::pi;
 }
@@ -69,12 +80,7 @@ TEST(FitModel, RecoversThePoseFromAPerturbedView) {
     const Eigen::Isometry3d truth = standing_pose(25.0);
     const esf::Points seen = render(box, truth);
     ASSERT_GT(seen.size(), 2000u);
-    // The matched view's rotation, 10 degrees off, from a camera looking straight at the model.
-    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
-    view.topLeftCorner<3, 3>() =
-        Eigen::AngleAxisd(10.0 * std::numbers::pi / 180.0, Eigen::Vector3d(1, 1, 0).normalized())
-            .toRotationMatrix() *
-        truth.linear();
+    const Eigen::Matrix4d view = view_ten_degrees_off(truth);
     const esf::ModelSurface surface = esf::sample_model_surface(box, 1.0, 3000, 1);
     const esf::PoseFit fit = esf::fit_model(surface, view, {seen, nullptr}, {});
     EXPECT_LT(rotation_error_deg(fit.model_to_camera.topLeftCorner<3, 3>(), truth.linear()), 2.0);
@@ -98,11 +104,7 @@ TEST(FitModel, TwoWayPairsKeepAFreeSizeWhereTheObjectIsCut) {
     for (const Eigen::Vector3f& p : whole)
         if ((truth.inverse() * p.cast<double>()).z() > 0.4 * 0.22) seen.push_back(p);
     ASSERT_GT(seen.size(), 1000u);
-    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
-    view.topLeftCorner<3, 3>() =
-        Eigen::AngleAxisd(10.0 * std::numbers::pi / 180.0, Eigen::Vector3d(1, 1, 0).normalized())
-            .toRotationMatrix() *
-        truth.linear();
+    const Eigen::Matrix4d view = view_ten_degrees_off(truth);
     const esf::ModelSurface surface = esf::sample_model_surface(box, 1.0, 3000, 1);
     esf::VerificationOptions one_way;
     esf::VerificationOptions two_way;
