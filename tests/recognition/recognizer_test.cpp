@@ -382,9 +382,9 @@ struct BruteForceRow {
 };
 
 /// Every view at the (weighted) L1 distance of its nearest row to `query` (that row), nearest
-/// first, ties by row.
+/// first, ties by row; `per_model`: only the nearest view of each model.
 std::vector<BruteForceRow> brute_force(const esf::DescriptorMatrix& m, std::span<const float> query,
-                                       const std::vector<float>& weights) {
+                                       const std::vector<float>& weights, bool per_model = false) {
     std::vector<BruteForceRow> out;
     for (std::size_t r = 0; r < m.rows(); ++r) {
         const auto row = m.row(r);
@@ -400,6 +400,12 @@ std::vector<BruteForceRow> brute_force(const esf::DescriptorMatrix& m, std::span
     std::erase_if(out, [&](const BruteForceRow& r) {
         return !seen.emplace(m.row_info[r.row].model, m.row_info[r.row].view_index).second;
     });
+    if (per_model) {
+        std::set<std::uint32_t> models;
+        std::erase_if(out, [&](const BruteForceRow& r) {
+            return !models.insert(m.row_info[r.row].model).second;
+        });
+    }
     return out;
 }
 
@@ -419,13 +425,7 @@ TEST_F(RecognizerTest, ViewsWithOccludedCopiesAreAsNearAsTheirNearestSignature) 
                 recognizer.describe(held_out_view(shape, kHeldOut[1], 4));
             ASSERT_TRUE(q.ok());
             const esf::Classification c = recognizer.classify_descriptor(q.signatures);
-            std::vector<BruteForceRow> expected = brute_force(m, q.signatures, {});
-            if (per_model) {
-                std::set<std::uint32_t> seen;
-                std::erase_if(expected, [&](const BruteForceRow& r) {
-                    return !seen.insert(m.row_info[r.row].model).second;
-                });
-            }
+            const std::vector<BruteForceRow> expected = brute_force(m, q.signatures, {}, per_model);
             ASSERT_EQ(c.neighbours.size(), std::min<std::size_t>(5, expected.size()));
             for (std::size_t n = 0; n < c.neighbours.size(); ++n) {
                 const esf::DescriptorRow& row = m.row_info[expected[n].row];
@@ -466,13 +466,8 @@ TEST_F(RecognizerTest, NeighboursEqualBruteForceL1) {
                 const esf::QueryDescriptor q = recognizer.describe(view);
                 ASSERT_TRUE(q.ok());
                 const esf::Classification c = recognizer.classify_descriptor(q.signatures);
-                std::vector<BruteForceRow> expected = brute_force(m, q.signatures, weights);
-                if (per_model) {  // the first (nearest) row of each model
-                    std::set<std::uint32_t> seen;
-                    std::erase_if(expected, [&](const BruteForceRow& r) {
-                        return !seen.insert(m.row_info[r.row].model).second;
-                    });
-                }
+                const std::vector<BruteForceRow> expected =
+                    brute_force(m, q.signatures, weights, per_model);
                 ASSERT_EQ(c.neighbours.size(), std::min<std::size_t>(10, expected.size()));
                 for (std::size_t n = 0; n < c.neighbours.size(); ++n) {
                     const esf::DescriptorRow& row = m.row_info[expected[n].row];
