@@ -483,6 +483,14 @@ Points Recognizer::posed_surface(const Classification& c) const {
 void Recognizer::verify(Classification& c, const Observation& observation, const PriorFit* prior,
                         std::vector<CandidateFit>* out_candidates) const {
     if (!verifies() || c.neighbours.empty()) return;
+    verify_prepared(c, PreparedObservation(observation, impl_->options.verification.camera), prior,
+                    out_candidates);
+}
+
+void Recognizer::verify_prepared(Classification& c, const PreparedObservation& prepared,
+                                 const PriorFit* prior,
+                                 std::vector<CandidateFit>* out_candidates) const {
+    if (!verifies() || c.neighbours.empty()) return;
     const VerificationOptions& o = impl_->options.verification;
     // A model the database rescaled (not metric in its catalog) has a guessed size.
     const auto guessed = [&](int model) {
@@ -491,7 +499,6 @@ void Recognizer::verify(Classification& c, const Observation& observation, const
     const auto size_free = [&](int model) { return o.every_size_free || guessed(model); };
     std::vector<std::size_t> picks;  // neighbours fitted, each with its fit in `fits`
     std::vector<PoseFit> fits;
-    const PreparedObservation prepared(observation, o.camera);
     if (prior && prior->pose.allFinite()) {
         const auto same = [&](const NeighbourView& n) { return n.model_id == prior->model_id; };
         const auto it = std::find_if(c.neighbours.begin(), c.neighbours.end(), same);
@@ -847,12 +854,13 @@ void Recognizer::merge_parts(SceneRecognition& scene, const PointCloud& frame) c
             const QueryDescriptor d = describe(merged.cluster.points);
             if (!d.ok()) return;
             merged.classification = classify_descriptor(d.signatures);
-            verify(merged.classification, Observation{merged.cluster.points, &frame});
+            // One observation for the union's candidates and the parts' models.
+            const PreparedObservation prepared(Observation{merged.cluster.points, &frame},
+                                               impl_->options.verification.camera);
+            verify_prepared(merged.classification, prepared);
             // Each part's own verified model, from where it stood: the model that explains the
             // larger part often explains the smaller one too (a mug's body and its handle)
             // when the union's nearest views hold no such model.
-            const PreparedObservation prepared(Observation{merged.cluster.points, &frame},
-                                               impl_->options.verification.camera);
             const double na = static_cast<double>(a.cluster.points.size());
             const double nb = static_cast<double>(b.cluster.points.size());
             // What the union's fit must exceed for the pair to become one object.

@@ -277,6 +277,10 @@ class Recognizer {
     void verify_objects(SceneRecognition& scene, const PointCloud* frame,
                         std::span<const std::optional<PriorFit>> priors) const;
     void merge_parts(SceneRecognition& scene, const PointCloud& frame) const;  // merge_parts
+    /// verify() against an observation prepared once (its grid and seen space built).
+    void verify_prepared(Classification& c, const PreparedObservation& prepared,
+                         const PriorFit* prior = nullptr,
+                         std::vector<CandidateFit>* candidates = nullptr) const;
     /// merge_parts: `part`'s verified model fitted to the union from the part's pose; when it
     /// is verified and scores more than `merged`'s fit (or `merged` has none verified) and more
     /// than `bar`, `merged` becomes the part's classification with that pose and fit.
