@@ -223,11 +223,12 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
     const std::string truth_path = (fs::path(folder) / "sequences.json").string();
     const nlohmann::json truth = read_json(truth_path);
     SequenceFusionResult result;
-    for (const std::size_t c : options.checkpoints) result.points.push_back({c, 0, 0, 0, 0, 0});
+    for (const std::size_t c : options.checkpoints) result.points.push_back({c, 0, 0, 0, 0, 0, 0});
     std::set<std::string> known;  // the classes of the database's views
     for (const ViewLabel& label : recognizer.classifier().labels()) known.insert(label.class_name);
     using Clock = std::chrono::steady_clock;
     try {
+        std::size_t sequence_index = 0;
         for (const nlohmann::json& sequence : truth.at("sequences")) {
             const std::string name = sequence.at("folder").get<std::string>();
             if (name.find('/') != std::string::npos || name.empty() || name[0] == '.')
@@ -235,6 +236,8 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
             std::map<std::uint32_t, std::string> class_of;
             for (const nlohmann::json& o : sequence.at("objects"))
                 class_of[o.at("object_id").get<std::uint32_t>()] = o.at("class").get<std::string>();
+            // Per true object: frames seen, frames named right.
+            std::map<std::uint32_t, std::pair<std::size_t, std::size_t>> seen;
             KinectRecordingReader reader((fs::path(folder) / name).string());
             ObjectTracker tracker(options.tracking);
             const nlohmann::json& frames = sequence.at("frames");
@@ -259,8 +262,8 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
                     const Eigen::Vector3f c(o["centroid"][0].get<float>(),
                                             o["centroid"][1].get<float>(),
                                             o["centroid"][2].get<float>());
-                    const std::string& true_class =
-                        class_of.at(o.at("object_id").get<std::uint32_t>());
+                    const auto object_id = o.at("object_id").get<std::uint32_t>();
+                    const std::string& true_class = class_of.at(object_id);
                     // The nearest object of the frame within the match distance.
                     std::size_t best = scene.objects.size();
                     double best_distance = options.match_distance;
@@ -273,16 +276,34 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
                         }
                     }
                     bool single = false, fused = false;
+                    SequenceFrameObject record;
                     if (best < scene.objects.size()) {
                         const RecognizedObject& found = scene.objects[best];
                         single =
                             found.classified() && found.classification.class_name == true_class;
                         for (const ObjectTrack& t : tracker.tracks())
-                            if (t.id == update.object_track[best])
+                            if (t.id == update.object_track[best]) {
                                 fused = t.class_name() == true_class;
+                                record.track = t.id;
+                                record.track_class = t.class_name();
+                            }
+                        record.found = &found;
+                    }
+                    if (options.on_object) {
+                        record.sequence = sequence_index;
+                        record.frame = f;
+                        record.object_id = object_id;
+                        record.true_class = true_class;
+                        record.cloud = &cloud;
+                        options.on_object(record);
                     }
                     const bool unknown = !known.contains(true_class);
+                    auto& [frames_seen, frames_right] = seen[object_id];
+                    ++frames_seen;
+                    frames_right += single;
+                    const bool any = frames_right > 0;
                     ++result.frame_objects;
+                    result.frame_any_right += any;
                     result.frame_single_right += single;
                     result.frame_fused_right += fused;
                     result.frame_unknown += unknown;
@@ -291,10 +312,17 @@ SequenceFusionResult evaluate_scene_sequences(const Recognizer& recognizer,
                         point->found += best < scene.objects.size();
                         point->single_right += single;
                         point->fused_right += fused;
+                        point->any_right += any;
                         point->unknown += unknown;
                     }
                 }
             }
+            for (const auto& [id, counts] : seen) {
+                ++result.objects;
+                result.objects_rarely_right += 10 * counts.second <= counts.first;
+                result.objects_mostly_right += 10 * counts.second >= 9 * counts.first;
+            }
+            ++sequence_index;
         }
     } catch (const nlohmann::json::exception& e) {
         throw IoError(file_message(truth_path, 0, e.what()));

@@ -16,10 +16,13 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "esf/core/error.hpp"
 #include "esf/evaluation/pose_accuracy.hpp"
 #include "esf/evaluation/scene_evaluation.hpp"
+#include "esf/evaluation/scene_sequences.hpp"
 #include "esf/evaluation/scene_truth.hpp"
 #include "esf/io/cloud_io.hpp"
 #include "esf/mesh/mesh.hpp"
@@ -375,4 +378,60 @@ TEST_F(GeneratedScenesTest, RotationErrorsAreGivenForModelsWithoutSymmetry) {
         rows_with_rotation += !o["rotation_error_deg"].is_null();
     EXPECT_EQ(rows_with_rotation, rotations);
     EXPECT_NE(esf::scene_report_html(report, "t").find("median rotation error"), std::string::npos);
+}
+
+TEST_F(GeneratedScenesTest, SequenceScoresBoundFusionAndReportEachFrameObjectInOrder) {
+    const std::string db = scenes_and_database(1, 4);
+    esf::SceneSequenceOptions options;
+    options.sequences = 2;
+    options.frames = 4;
+    options.clutter.seed = 5;
+    options.clutter.types = {esf::ClutterType::kIsolated, esf::ClutterType::kMixed};
+    const esf::SceneSequenceSet set =
+        esf::generate_scene_sequences(root_.string(), (base_ / "q").string(), options);
+    ASSERT_EQ(set.folders.size(), 2u);
+
+    const esf::Recognizer recognizer(db);
+    esf::SequenceFusionOptions fusion;
+    fusion.checkpoints = {1, 2, 4};
+    std::vector<esf::SequenceFrameObject> seen;
+    std::size_t found = 0, single_right = 0;
+    fusion.on_object = [&](const esf::SequenceFrameObject& o) {
+        seen.push_back(o);
+        if (!o.found) return;
+        ++found;
+        single_right += o.found->classified() && o.found->classification.class_name ==
+                                                     o.true_class;
+        EXPECT_NE(o.track, 0u);
+        EXPECT_FALSE(o.track_class.empty());
+        EXPECT_NE(o.cloud, nullptr);
+    };
+    const esf::SequenceFusionResult r =
+        esf::evaluate_scene_sequences(recognizer, (base_ / "q").string(), fusion);
+
+    // Every true object of every frame is reported once, sequence by sequence, frame by frame.
+    ASSERT_EQ(seen.size(), r.frame_objects);
+    ASSERT_GT(found, 0u);
+    EXPECT_EQ(single_right, r.frame_single_right);
+    for (std::size_t i = 1; i < seen.size(); ++i)
+        EXPECT_TRUE(std::pair(seen[i - 1].sequence, seen[i - 1].frame) <=
+                    std::pair(seen[i].sequence, seen[i].frame));
+    EXPECT_EQ(seen.back().sequence, 1u);
+    EXPECT_EQ(seen.back().frame, 3u);
+    std::set<std::pair<std::size_t, std::uint32_t>> objects;
+    for (const esf::SequenceFrameObject& o : seen) objects.insert({o.sequence, o.object_id});
+    EXPECT_EQ(r.objects, objects.size());
+    EXPECT_LE(r.objects_rarely_right + r.objects_mostly_right, r.objects);
+
+    // One of its frames so far is right at least as often as the frame alone and the track;
+    // after one frame, exactly when that frame is.
+    EXPECT_GE(r.frame_any_right, r.frame_single_right);
+    EXPECT_GE(r.frame_any_right, r.frame_fused_right);
+    ASSERT_FALSE(r.points.empty());
+    EXPECT_EQ(r.points.front().frames, 1u);
+    EXPECT_EQ(r.points.front().any_right, r.points.front().single_right);
+    for (const esf::SequenceFusionPoint& p : r.points) {
+        EXPECT_GE(p.any_right, p.single_right);
+        EXPECT_LE(p.any_right, p.objects);
+    }
 }

@@ -57,6 +57,19 @@ struct SceneSequenceSet {
 SceneSequenceSet generate_scene_sequences(const std::string& root, const std::string& output,
                                           const SceneSequenceOptions& options);
 
+/// One true object of one frame as evaluate_scene_sequences() scores it (for studies of fusion
+/// rules: SequenceFusionOptions::on_object).
+struct SequenceFrameObject {
+    std::size_t sequence = 0;  ///< in sequences.json's order
+    std::size_t frame = 0;     ///< within the sequence
+    std::uint32_t object_id = 0;
+    std::string true_class;
+    const RecognizedObject* found = nullptr;  ///< the frame's object matched to it, or none
+    std::uint64_t track = 0;                  ///< found's track id (0: none)
+    std::string track_class;                  ///< that track's class after this frame
+    const PointCloud* cloud = nullptr;        ///< the frame
+};
+
 struct SequenceFusionOptions {
     /// Frames after which the tracks' classes are scored (1 = a single frame).
     std::vector<std::size_t> checkpoints = {1, 10, 30};
@@ -65,6 +78,8 @@ struct SequenceFusionOptions {
     /// A true object is found in a frame when an object's centroid lies within this distance
     /// (metres) of the centroid of its pixels.
     double match_distance = 0.05;
+    /// Called for each true object of each frame after it is scored, in order (empty: none).
+    std::function<void(const SequenceFrameObject&)> on_object;
 };
 
 /// The score after a number of frames.
@@ -74,6 +89,9 @@ struct SequenceFusionPoint {
     std::size_t found = 0;         ///< of them, matched by an object of the frame
     std::size_t single_right = 0;  ///< named right by that frame alone
     std::size_t fused_right = 0;   ///< named right by the object's track
+    /// Named right by at least one of the object's frames so far: the most that any fusion
+    /// rule choosing among the classes its frames named could reach.
+    std::size_t any_right = 0;
     /// Of `objects`, those of a class the database has no model of: never named right, and
     /// counted in `objects` all the same.
     std::size_t unknown = 0;
@@ -85,6 +103,13 @@ struct SequenceFusionResult {
     std::size_t frame_single_right = 0;       ///< of them, named right by their frame alone
     std::size_t frame_fused_right = 0;        ///< of them, named right by their track then
     std::size_t frame_unknown = 0;            ///< of them, of a class the database has no model of
+    std::size_t frame_any_right = 0;  ///< of them, named right by one of their frames so far
+    /// True objects (of all sequences) seen in at least one frame, and of them those named right
+    /// by at most a tenth and by at least nine tenths of the frames they were seen in: errors
+    /// that are the same from every side leave fusion nothing to decide.
+    std::size_t objects = 0;
+    std::size_t objects_rarely_right = 0;
+    std::size_t objects_mostly_right = 0;
     std::size_t frames = 0;                   ///< frames processed
     double seconds = 0.0;  ///< frames' processing time (segment, recognise, track)
 };
