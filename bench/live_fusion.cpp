@@ -3,7 +3,8 @@
 // track, in every frame and after 1, 10 and 30 frames (esf/evaluation/scene_sequences.hpp).
 //
 //   live_fusion DB DIR [--threads N] [--fusion models|likelihood] [--no-verify]
-//               [--no-prior-fits] [--no-merge-parts] [--objects FILE]
+//               [--no-prior-fits] [--no-merge-parts] [--match-distance M] [--max-misses N]
+//               [--objects FILE]
 //
 // --objects FILE: one tab-separated row per true object of every frame, for studies of fusion
 // rules: sequence, frame, object, true class, track, track's class, points (0: not found), the
@@ -28,7 +29,8 @@ int main(int argc, char** argv) {
     if (argc < 3) {
         std::fprintf(stderr,
                      "usage: live_fusion DB DIR [--threads N] [--fusion models|likelihood] "
-                     "[--no-verify] [--no-prior-fits] [--no-merge-parts] [--objects FILE]\n");
+                     "[--no-verify] [--no-prior-fits] [--no-merge-parts] [--match-distance M] "
+                     "[--max-misses N] [--objects FILE]\n");
         return 1;
     }
     esf::RecognizerOptions options;
@@ -67,9 +69,9 @@ int main(int argc, char** argv) {
             if (!*rows) throw std::runtime_error("cannot write " + objects_path);
             fusion.on_object = [&](const esf::SequenceFrameObject& o) {
                 std::ofstream& out = *rows;
-                out << o.sequence << '\t' << o.frame << '\t' << o.object_id << '\t'
-                    << o.true_class << '\t' << o.track << '\t'
-                    << (o.track_class.empty() ? "-" : o.track_class) << '\t';
+                out << o.sequence << '\t' << o.frame << '\t' << o.object_id << '\t' << o.true_class
+                    << '\t' << o.track << '\t' << (o.track_class.empty() ? "-" : o.track_class)
+                    << '\t';
                 const esf::RecognizedObject* found = o.found;
                 if (!found || !found->classified()) {
                     out << (found ? found->cluster.points.size() : 0) << "\t-\t0\n";

@@ -400,8 +400,7 @@ TEST_F(GeneratedScenesTest, SequenceScoresBoundFusionAndReportEachFrameObjectInO
         seen.push_back(o);
         if (!o.found) return;
         ++found;
-        single_right += o.found->classified() && o.found->classification.class_name ==
-                                                     o.true_class;
+        single_right += o.found->classified() && o.found->classification.class_name == o.true_class;
         EXPECT_NE(o.track, 0u);
         EXPECT_FALSE(o.track_class.empty());
         EXPECT_NE(o.cloud, nullptr);

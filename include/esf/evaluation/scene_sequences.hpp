@@ -110,8 +110,8 @@ struct SequenceFusionResult {
     std::size_t objects = 0;
     std::size_t objects_rarely_right = 0;
     std::size_t objects_mostly_right = 0;
-    std::size_t frames = 0;                   ///< frames processed
-    double seconds = 0.0;  ///< frames' processing time (segment, recognise, track)
+    std::size_t frames = 0;  ///< frames processed
+    double seconds = 0.0;    ///< frames' processing time (segment, recognise, track)
 };
 
 /// Plays each recording of a generate_scene_sequences() folder through segmentation,
