@@ -316,6 +316,9 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
         return true;
     };
 
+    // Two-way: each paired object point's match of the last iteration starts its next search,
+    // as the samples' do.
+    std::vector<std::size_t> object_matches;
     std::vector<Eigen::Vector3d> points, normals;
     std::vector<std::size_t> indices;
     double scale = 1.0;  // relative to the surface's
@@ -378,14 +381,17 @@ PoseFit fit_model(const PreparedModel& model, const Eigen::Matrix4d& view_pose,
             const double reach = radius / scale;
             const std::size_t n = object.points().size();
             const std::size_t object_step = std::max<std::size_t>(1, n / kIcpSamples);
+            if (object_matches.empty()) object_matches.assign(n / object_step + 1, kNoMatch);
             for (std::size_t k = 0; k < n; k += object_step) {
                 const Eigen::Vector3d q = object.points()[k].cast<double>();
                 const Eigen::Vector3d local = r_t * (q - t);
                 float squared = 0.0f;
                 std::size_t m = 0;
+                std::size_t& hint = object_matches[k / object_step];
                 if (!tree.nearest_within(local.cast<float>(), static_cast<float>(reach * reach),
-                                         kNoMatch, m, squared))
+                                         hint, m, squared))
                     continue;
+                hint = m;
                 const Eigen::Vector3d p = r * surface.points[m].cast<double>() + t;
                 Eigen::Vector3d nrm = r * surface.normals[m].cast<double>();
                 if (nrm.dot(p) >= 0.0) continue;  // a sample facing away
