@@ -57,7 +57,7 @@ inline void add_verification_options(CLI::App& cmd, RecognizerOptions& options) 
         "--two-way-icp", [&options] { options.verification.two_way = true; },
         "Pair the object's points with the model too, not only the model's with the object: "
         "better poses and sizes where the database holds the objects' own models (exact CAD "
-        "models of known objects); verification takes about 1.6 times as long");
+        "models of known objects); verification takes about 1.5 times as long");
     cmd.add_flag_callback(
         "--no-merge-parts", [&options] { options.merge_parts = false; },
         "Scenes: keep the objects as segmented (default: two neighbouring objects become one "

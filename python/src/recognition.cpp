@@ -238,7 +238,7 @@ void bind_recognition(py::module_& m) {
              "whose size the catalog guesses (default: every model's size within [0.8, 1.25] "
              "while the candidates compete). ``two_way_icp`` pairs the object's points with "
              "the model too, for better poses and sizes where the database holds the objects' "
-             "own models (verification takes about 1.6 times as long). Raises "
+             "own models (verification takes about 1.5 times as long). Raises "
              "FileNotFoundError / "
              "OSError for a missing or broken file, "
              "ValueError for a database it cannot use.")
