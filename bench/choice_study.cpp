@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "candidate_fits.hpp"
 #include "esf/evaluation/evaluation.hpp"
 #include "esf/evaluation/scene_evaluation.hpp"
 #include "esf/evaluation/scene_truth.hpp"
@@ -28,12 +29,11 @@ void print_candidates(const esf::Recognizer& recognizer, const std::string& scen
                       std::uint32_t object, const std::string& true_class,
                       const std::string& true_model, const esf::Points& points,
                       const esf::PointCloud* frame) {
-    const esf::QueryDescriptor d = recognizer.describe(points);
-    if (!d.ok()) return;
-    esf::Classification c = recognizer.classify_descriptor(d.signatures);
-    const esf::Classification knn = c;
-    std::vector<esf::CandidateFit> candidates;
-    recognizer.verify(c, esf::Observation{points, frame}, nullptr, &candidates);
+    const std::optional<esf::bench::CandidateFits> fitted =
+        esf::bench::fit_candidates(recognizer, points, frame);
+    if (!fitted) return;
+    const esf::Classification& knn = fitted->knn;
+    const std::vector<esf::CandidateFit>& candidates = fitted->fits;
     for (std::size_t j = 0; j < candidates.size(); ++j) {
         const esf::CandidateFit& f = candidates[j];
         const esf::NeighbourView& n = knn.neighbours[f.neighbour];

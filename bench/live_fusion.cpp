@@ -20,9 +20,11 @@
 #include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
+#include "candidate_fits.hpp"
 #include "esf/evaluation/scene_sequences.hpp"
 
 int main(int argc, char** argv) {
@@ -80,15 +82,10 @@ int main(int argc, char** argv) {
                 const esf::Classification& c = found->classification;
                 out << found->cluster.points.size() << '\t' << c.class_name << '\t'
                     << (c.fit ? c.fit->score() : 0.0);
-                const esf::QueryDescriptor d = recognizer.describe(found->cluster.points);
-                if (d.ok()) {
-                    esf::Classification fresh = recognizer.classify_descriptor(d.signatures);
-                    const esf::Classification knn = fresh;
-                    std::vector<esf::CandidateFit> candidates;
-                    recognizer.verify(fresh, esf::Observation{found->cluster.points, o.cloud},
-                                      nullptr, &candidates);
-                    for (const esf::CandidateFit& f : candidates) {
-                        const esf::NeighbourView& n = knn.neighbours[f.neighbour];
+                if (const std::optional<esf::bench::CandidateFits> fitted =
+                        esf::bench::fit_candidates(recognizer, found->cluster.points, o.cloud)) {
+                    for (const esf::CandidateFit& f : fitted->fits) {
+                        const esf::NeighbourView& n = fitted->knn.neighbours[f.neighbour];
                         out << '\t' << n.class_name << ':' << n.model_name << ':'
                             << f.fit.fit.score() - f.shape_term << ':' << (f.fit.verified ? 1 : 0);
                     }
