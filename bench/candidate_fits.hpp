@@ -11,14 +11,13 @@
 namespace esf::bench {
 
 struct CandidateFits {
-    Classification knn;                 ///< the k-NN classification, before verification
-    std::vector<CandidateFit> fits;     ///< CandidateFit::neighbour indexes knn.neighbours
+    Classification knn;              ///< the k-NN classification, before verification
+    std::vector<CandidateFit> fits;  ///< CandidateFit::neighbour indexes knn.neighbours
 };
 
 /// Nothing when the points cannot be described (too few).
 inline std::optional<CandidateFits> fit_candidates(const Recognizer& recognizer,
-                                                   const Points& points,
-                                                   const PointCloud* frame) {
+                                                   const Points& points, const PointCloud* frame) {
     const QueryDescriptor d = recognizer.describe(points);
     if (!d.ok()) return std::nullopt;
     CandidateFits out;
