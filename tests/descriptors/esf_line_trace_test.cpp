@@ -203,6 +203,30 @@ TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
     }
 }
 
+// An estimator's scratch serves whichever tracer its trials pick for each call: the cube table
+// one kernel built for a grid must be cleared right when another kernel builds it for the next.
+TEST(LineTrace, SimdKernelsTakeTurnsOnOneScratch) {
+    std::mt19937 rng(9);
+    esf::detail::TraceScratch scratch;
+    for (std::uint32_t turn = 0; turn < 12; ++turn) {
+        const esf::Kernels kernel = kSimdKernels[turn % std::size(kSimdKernels)];
+        std::uniform_int_distribution<std::uint32_t> coord(0, 40);
+        esf::detail::VoxelGrid grid;
+        grid.clear();
+        std::vector<std::uint32_t> points;
+        for (int i = 0; i < 150; ++i) {
+            std::uint32_t c[3];
+            for (int k = 0; k < 3; ++k) c[k] = (turn >> k & 1) ? 63 - coord(rng) : coord(rng);
+            points.push_back(pack_cell(c[0], c[1], c[2]));
+            grid.set(points.back());
+        }
+        grid.dilate(64);
+        expect_kernel_matches_scalar(grid, lines_between(points, 3001, rng), kernel,
+                                     esf::detail::LineEnds::kSetBeforeDilation, scratch,
+                                     "turn " + std::to_string(turn));
+    }
+}
+
 /// A line of `length` steps along `axis` (0, 1, 2) from a random cell, up the axis; its minor
 /// axes move at most `length` cells either way, at random.
 std::pair<std::uint32_t, std::uint32_t> line_along(int axis, std::uint32_t length,

@@ -1,6 +1,7 @@
 #include "descriptors/esf/esf_trace.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 
 #include "core/simd.hpp"
@@ -60,6 +61,35 @@ inline std::uint32_t trace_one(const VoxelGrid& grid, std::uint32_t start, const
 
 }  // namespace
 
+std::size_t chunk_lines(std::span<const std::uint8_t> visited, TraceScratch& scratch) {
+    const std::size_t count = visited.size();
+    // Every chunk is full but each count's last: at most count / kChunkLines + kGridSide + 1.
+    const std::size_t most_chunks = count / kChunkLines + kGridSide + 1;
+    scratch.chunked.resize(most_chunks * kChunkLines);
+    scratch.chunk_visited.resize(most_chunks);
+    scratch.chunk_size.resize(most_chunks);
+    std::uint64_t* const pool = scratch.chunked.data();
+    const std::uint64_t* const records = scratch.records.data();
+    // Per count: where its next record goes (0: no chunk yet). A count whose next place starts
+    // a chunk has filled its chunk (or has none) and opens the next free one.
+    std::array<std::uint32_t, kGridSide + 1> next{};
+    std::uint32_t chunks = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::uint8_t v = visited[i];
+        std::uint32_t at = next[v];
+        if (at % kChunkLines == 0) {  // one record in kChunkLines
+            scratch.chunk_visited[chunks] = v;
+            at = chunks++ * kChunkLines;
+        }
+        pool[at] = records[i];
+        next[v] = at + 1;
+    }
+    for (std::uint32_t c = 0; c < chunks; ++c) scratch.chunk_size[c] = kChunkLines;
+    for (const std::uint32_t at : next)  // each count's last chunk, full or not
+        if (at != 0) scratch.chunk_size[(at - 1) / kChunkLines] = (at - 1) % kChunkLines + 1;
+    return chunks;
+}
+
 Tracer widest_tracer() {
     if (avx512_available())
         return avx512_vpopcntdq_available() ? Tracer::kAvx512Popcount : Tracer::kAvx512;
@@ -88,9 +118,9 @@ void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
     if (kernels == Kernels::kAvx512) use = std::min(widest, Tracer::kAvx512);
     if (kernels == Kernels::kAvx2) use = std::min(widest, Tracer::kAvx2);
     if (kernels == Kernels::kPortable) use = Tracer::kPortable;
-    // The AVX-512 kernels pack line numbers into 28 bits (ESF draws at most 3 * 10^7 lines).
+    // The SIMD kernels pack line numbers into 28 bits (ESF draws at most 3 * 10^7 lines).
     static_assert(kMaxPackedLines == std::size_t{1} << 28);
-    if (use >= Tracer::kAvx512 && starts.size() >= kMaxPackedLines) use = Tracer::kAvx2;
+    if (use >= Tracer::kAvx2 && starts.size() >= kMaxPackedLines) use = Tracer::kPortable;
     switch (use) {
         case Tracer::kAvx512Popcount:
         case Tracer::kAvx512:
@@ -99,7 +129,8 @@ void trace_lines(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                                use == Tracer::kAvx512Popcount);
             break;
         case Tracer::kAvx2:
-            trace_lines_avx2(grid, starts, ends, occupied, visited, scratch);
+            trace_lines_avx2(grid, starts, ends, occupied, visited, scratch,
+                             line_ends == LineEnds::kSetBeforeDilation);
             break;
         case Tracer::kPortable:
             trace_lines_scalar(grid, starts, ends, occupied, visited);

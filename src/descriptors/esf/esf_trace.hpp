@@ -35,7 +35,7 @@ struct TraceScratch {
     std::vector<std::uint64_t> records, chunked;
     std::vector<std::uint8_t> chunk_visited;  // per chunk: the visited count of its lines
     std::vector<std::uint32_t> chunk_size;    // per chunk: how many lines it holds
-    std::vector<std::uint32_t> cubes;         // 3x3x3 cube occupancy per cell (AVX-512 kernel)
+    std::vector<std::uint32_t> cubes;         // 3x3x3 cube occupancy per cell (SIMD kernels)
     std::vector<std::uint64_t> dirty_rows;    // bitmap: rows of `cubes` that are not all zero
 };
 

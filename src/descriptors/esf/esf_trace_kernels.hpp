@@ -3,11 +3,12 @@
 // choice; esf_trace_avx2.cpp; esf_trace_avx512.cpp), and what they share.
 //
 // The SIMD kernels trace 16 (AVX-512) or 8 (AVX2) lines of equal or similar length at once,
-// one line per lane. The AVX-512 kernel's groups hold lines of one length (bucketed, see
-// bucket_lines_avx512), so they run without per-lane masks. The AVX2 kernel's lines are sorted
-// by length: a group runs min(n) cells without masks and only its few longer lanes run on with
-// an activity mask. Gathers are never masked (slow on some CPUs): lanes past their end keep
-// their look-up inside the table and their bits are dropped.
+// one line per lane, three cells per look-up in a table of 3x3x3 cubes (esf_cube_table.hpp).
+// The AVX-512 kernel's groups hold lines of one length (bucketed, see bucket_lines_avx512), so
+// they run without per-lane masks. The AVX2 kernel's lines are sorted by length: a group runs
+// min(n) cells without masks and only its few longer lanes run on with an activity mask.
+// Gathers are never masked (slow on some CPUs): lanes past their end look up a cell inside the
+// table and their bits are dropped.
 
 #include <cstddef>
 #include <cstdint>
@@ -29,6 +30,22 @@ inline constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
 inline constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
 inline constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
 
+/// The record of line `line`: start | end << kEndShift | line << kLineShift.
+inline std::uint64_t line_record(std::uint32_t start, std::uint32_t end, std::size_t line) {
+    return start | std::uint64_t{end} << kEndShift | std::uint64_t{line} << kLineShift;
+}
+
+/// Lines per chunk of chunk_lines(): a multiple of the 16 lanes of a group.
+inline constexpr std::uint32_t kChunkLines = 256;
+
+/// Buckets the records of all lines (scratch.records, one per line in input order, with their
+/// visited counts) by visited count: each count fills chunks of kChunkLines records taken in
+/// turn from one pool (scratch.chunked), so every group of lanes in a chunk has lines of one
+/// length. Chunks are numbered in the order they are opened; each count's last chunk may be
+/// partly filled (scratch.chunk_size). Unlike a counting sort, no tally of the counts is needed
+/// first. Returns the number of chunks.
+std::size_t chunk_lines(std::span<const std::uint8_t> visited, TraceScratch& scratch);
+
 /// trace_lines() with AVX-512, for fewer than kMaxPackedLines lines. `skip_known`: the lines
 /// meet LineEnds::kSetBeforeDilation; `with_popcount`: the build that counts with VPOPCNTDQ
 /// (needs avx512_vpopcntdq_available()).
@@ -37,9 +54,10 @@ void trace_lines_avx512(const VoxelGrid& grid, std::span<const std::uint32_t> st
                         std::span<std::uint8_t> visited, TraceScratch& scratch, bool skip_known,
                         bool with_popcount);
 
-/// trace_lines() with AVX2.
+/// trace_lines() with AVX2, for fewer than kMaxPackedLines lines. `skip_known`: as for
+/// trace_lines_avx512().
 void trace_lines_avx2(const VoxelGrid& grid, std::span<const std::uint32_t> starts,
                       std::span<const std::uint32_t> ends, std::span<std::uint32_t> occupied,
-                      std::span<std::uint8_t> visited, TraceScratch& scratch);
+                      std::span<std::uint8_t> visited, TraceScratch& scratch, bool skip_known);
 
 }  // namespace esf::detail
