@@ -28,7 +28,8 @@ ESF_CUBE_TARGET inline __m512i minor2_of(const AxisRoles& r, const __m512i* v) {
     return _mm512_mask_blend_epi32(r.z_major, v[2], v[1]);
 }
 
-ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
+/// `visited`: max(L, 1), the same for every line of the group.
+ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, int visited, bool skip_known) {
     const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
     const __m512i m63 = _mm512_set1_epi32(63);
     __m512i length[3], step[3], weight[3];  // weight: signed bit weight of the axis in a cube
@@ -54,17 +55,9 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
         static_cast<__mmask16>(~x_major & _mm512_cmpge_epi32_mask(length[1], length[2]));
     const __mmask16 z_major = static_cast<__mmask16>(~(x_major | y_major));
     const AxisRoles roles{x_major, y_major, z_major};
-    const __m512i cells = _mm512_max_epi32(major_of(roles, length), one);  // visited: max(L, 1)
-    const __m512 l = _mm512_cvtepi32_ps(cells);
-    // 1 / (2L) from a table of the 64 possible values (a division's latency would hold up the
-    // group's first steps).
-    const __m512i slot = _mm512_sub_epi32(cells, one);
+    const __m512 l = _mm512_set1_ps(static_cast<float>(visited));
     const __m512 half_per_cell =
-        _mm512_mask_blend_ps(_mm512_cmpge_epi32_mask(slot, _mm512_set1_epi32(32)),
-                             _mm512_permutex2var_ps(_mm512_load_ps(kHalfPerCell.data()), slot,
-                                                    _mm512_load_ps(kHalfPerCell.data() + 16)),
-                             _mm512_permutex2var_ps(_mm512_load_ps(kHalfPerCell.data() + 32), slot,
-                                                    _mm512_load_ps(kHalfPerCell.data() + 48)));
+        _mm512_set1_ps(kHalfPerCell[static_cast<std::size_t>(visited - 1)]);
     CubeLanes lanes;
     lanes.start = _mm512_cvtepi32_ps(_mm512_add_epi32(s, anchor_offset));
     lanes.major_step = _mm512_cvtepi32_ps(major_of(roles, step));
@@ -88,7 +81,7 @@ ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, bool skip_known) {
     lanes.weight1 = minor1_of(roles, weight);
     lanes.weight2 = minor2_of(roles, weight);
     // With known ends, cells 0, 1 and L-1 count without a look-up and the walk covers 2..L-2.
-    lanes.occupied = skip_known ? _mm512_min_epi32(cells, _mm512_set1_epi32(3)) : zero;
+    lanes.occupied = _mm512_set1_epi32(skip_known ? std::min(visited, 3) : 0);
     return lanes;
 }
 
@@ -189,13 +182,14 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const TraceSc
     for (std::size_t chunk = 0; chunk < chunks; ++chunk) {
         const std::size_t count = scratch.chunk_size[chunk];
         const std::uint64_t* const records = scratch.chunked.data() + chunk * kChunkLines;
-        const int cells = scratch.chunk_visited[chunk] - end_skip;
+        const int chunk_cells = scratch.chunk_visited[chunk];
+        const int cells = chunk_cells - end_skip;
         for (std::size_t group = 0; group < count; group += 16) {
             const std::size_t size = std::min<std::size_t>(16, count - group);
             const auto live = static_cast<__mmask16>((1u << size) - 1u);
             __m512i s, t, lines;
             unpack_lines(records + group, live, s, t, lines);
-            CubeLanes lanes = setup_cubes(s, t, skip_known);
+            CubeLanes lanes = setup_cubes(s, t, chunk_cells, skip_known);
             int i = first_cell;
             CubeWalk walk = start_walk(lanes, i);
             for (; i + 2 < cells; i += 3, advance_walk(lanes, walk))
