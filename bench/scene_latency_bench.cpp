@@ -4,13 +4,16 @@
 // surfaces), verified without merging parts (frame_unmerged) and by k-NN only. The paper's
 // target is a frame at 30 Hz (33 ms) on two cores.
 //
-//   scene_latency_bench [--db PATH] [--threads N] [benchmark flags]
+//   scene_latency_bench [--db PATH] [--threads N] [--kernels best|avx512|avx2|portable]
+//                       [benchmark flags]
 //
 // --db: a training database (default $ESF_BENCH_DB or /tmp/esf_all.sqlite, made with
 // `esf train ../shared/data/meshes -o /tmp/esf_all.sqlite`). When it does not exist, a database
 // of the same size (185 models x 80 views of random ESF-like descriptors) is written to
 // /tmp/esf_bench_synthetic.sqlite once and used instead: the search cost then matches, the
-// classes do not. --threads: worker threads for every stage (default 2).
+// classes do not. --threads: worker threads for every stage (default 2). --kernels: the SIMD
+// kernels of description and search (RecognizerOptions::kernels; avx2: what a CPU without
+// AVX-512 runs; the same results).
 
 #include <benchmark/benchmark.h>
 
@@ -36,6 +39,7 @@ namespace fs = std::filesystem;
 namespace {
 
 int g_threads = 2;
+esf::Kernels g_kernels = esf::Kernels::kBest;
 std::unique_ptr<esf::Recognizer> g_recognizer;  // verifies when the database stores surfaces
 std::unique_ptr<esf::Recognizer> g_knn_only;
 std::unique_ptr<esf::Recognizer> g_unmerged;  // verifies, parts stay as segmented
@@ -163,6 +167,8 @@ int main(int argc, char** argv) {
             db_path = argv[++i];
         else if (arg == "--threads" && i + 1 < argc)
             g_threads = std::atoi(argv[++i]);
+        else if (arg == "--kernels" && i + 1 < argc)
+            g_kernels = esf::parse_enum<esf::Kernels>(argv[++i]);
         else
             rest.push_back(argv[i]);
     }
@@ -179,6 +185,7 @@ int main(int argc, char** argv) {
     }
     esf::RecognizerOptions options;
     options.threads = g_threads;
+    options.kernels = g_kernels;
     g_recognizer = std::make_unique<esf::Recognizer>(db_path, options);
     options.merge_parts = false;
     g_unmerged = std::make_unique<esf::Recognizer>(db_path, options);
@@ -186,10 +193,11 @@ int main(int argc, char** argv) {
     g_knn_only = std::make_unique<esf::Recognizer>(db_path, options);
     const esf::RecognizerInfo& info = g_recognizer->info();
     std::fprintf(stderr,
-                 "database %s: %zu views of %zu models, %s samples %d, threads %d, "
+                 "database %s: %zu views of %zu models, %s samples %d, threads %d, kernels %s, "
                  "verification: %s\n",
                  db_path.c_str(), info.views, info.models, info.setup.kind.name.c_str(),
-                 info.setup.esf.samples, g_threads, info.verification.c_str());
+                 info.setup.esf.samples, g_threads, esf::to_string(g_kernels),
+                 info.verification.c_str());
 
     const fs::path scenes_dir = esf::bench::data_dir() / "real" / "scenes";
     std::vector<std::pair<std::string, std::unique_ptr<esf::PointCloud>>> scenes;

@@ -127,6 +127,7 @@ EsfOptions fast_esf_options(const DescriptorOptions& options) {
     out.samples = options.samples;
     out.seed = options.seed;
     out.sampler = EsfSampler::kFast;
+    out.kernels = options.kernels;
     return out;
 }
 

@@ -221,6 +221,11 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
     } catch (const std::invalid_argument& e) {
         fail(e.what());
     }
+    if (!kernels_supported(options.kernels))
+        throw std::invalid_argument(std::string("recognizer: this CPU does not run the ") +
+                                    to_string(options.kernels) + " kernels");
+    impl_->info.setup.esf.kernels = options.kernels;
+    impl_->info.setup.options.kernels = options.kernels;
     impl_->describer = make_describer(impl_->info.setup, options.query_samplings);
 
     DescriptorMatrix matrix = db.load_descriptors(kind.name);
@@ -244,6 +249,7 @@ Recognizer::Recognizer(const std::string& path, const RecognizerOptions& options
 
     KnnIndexOptions index_options;
     index_options.threads = options.threads;
+    index_options.kernels = options.kernels;
     index_options.sketch_group = descriptor_sketch_group(kind.name);
     if (options.use_weights) {
         if (const auto weights = db.weights(kind.name)) {

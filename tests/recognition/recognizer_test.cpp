@@ -511,6 +511,39 @@ TEST_F(RecognizerTest, BatchEqualsOneByOneForAnyThreadCount) {
     }
 }
 
+// Every kernel set the CPU runs describes and searches alike: the same descriptor, the same
+// neighbours at the same distances, the same verified class and fit.
+TEST_F(RecognizerTest, EveryKernelSetGivesTheSameResults) {
+    std::vector<esf::Points> clouds;
+    for (const auto& shape : kShapes) clouds.push_back(held_out_view(shape, kHeldOut[0], 0));
+    const esf::Recognizer reference(db_path_, {});
+    for (const esf::Kernels kernels :
+         {esf::Kernels::kAvx512, esf::Kernels::kAvx2, esf::Kernels::kPortable}) {
+        if (!esf::kernels_supported(kernels)) continue;
+        esf::RecognizerOptions options;
+        options.kernels = kernels;
+        const esf::Recognizer recognizer(db_path_, options);
+        EXPECT_EQ(recognizer.info().setup.esf.kernels, kernels);
+        for (const esf::Points& cloud : clouds) {
+            EXPECT_EQ(recognizer.describe(cloud).signatures, reference.describe(cloud).signatures)
+                << esf::to_string(kernels);
+            const esf::Classification got = recognizer.classify(cloud);
+            const esf::Classification want = reference.classify(cloud);
+            EXPECT_EQ(got.class_name, want.class_name);
+            EXPECT_EQ(got.best_model, want.best_model);
+            ASSERT_EQ(got.neighbours.size(), want.neighbours.size());
+            for (std::size_t n = 0; n < want.neighbours.size(); ++n) {
+                EXPECT_EQ(got.neighbours[n].index, want.neighbours[n].index);
+                EXPECT_EQ(got.neighbours[n].distance, want.neighbours[n].distance);
+            }
+            ASSERT_EQ(got.fit.has_value(), want.fit.has_value());
+            if (want.fit) {
+                EXPECT_EQ(got.fit->inliers, want.fit->inliers);
+            }
+        }
+    }
+}
+
 TEST_F(RecognizerTest, BadCloudsThrowNamingTheDescriptor) {
     const esf::Recognizer recognizer(db_path_);
     const esf::Points two = {{0, 0, 1}, {0.1f, 0, 1}};

@@ -50,6 +50,7 @@
 #include <string>
 #include <vector>
 
+#include "esf/core/kernels.hpp"
 #include "esf/core/point_cloud.hpp"
 #include "esf/descriptors/esf/esf_descriptor.hpp"
 #include "esf/descriptors/primitive_fit.hpp"
@@ -136,6 +137,9 @@ struct DescriptorOptions {
     double angles_weight = kEsfAnglesWeight;
     /// esf-angles: weight of the primitive fit block against ESF's 1 (finite, >= 0).
     double primitive_weight = kEsfPrimitiveWeight;
+    /// esf, esf-angles, sdvs, d2: the kernels of the triple sampler (EsfOptions::kernels; every
+    /// set gives the same signatures).
+    Kernels kernels = Kernels::kBest;
 };
 
 /// One descriptor vector (its length is info().dimension).

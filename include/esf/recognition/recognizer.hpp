@@ -58,6 +58,10 @@ struct RecognizerOptions {
     /// brings the query nearer its expected histogram. Costs one description per sampling.
     int query_samplings = 1;
     int threads = 0;  ///< building the index, describing and classifying batches; 0 = all cores
+    /// The SIMD kernels of description and search (EsfOptions::kernels, KnnIndexOptions::kernels):
+    /// every set gives the same results; kAvx2 runs what a CPU without AVX-512 runs. A set the
+    /// CPU lacks is refused (std::invalid_argument).
+    Kernels kernels = Kernels::kBest;
     /// Verify every classification (esf/recognition/pose_verification.hpp): the nearest
     /// `verification.candidates` models are aligned to the points and the best fit names the
     /// class (verification.decide_class), model and 6-DoF pose. Needs each model's surface: the
