@@ -118,10 +118,12 @@ TEST(VoxelGrid, DilationKernelsMatchTheDefinition) {
                             }
                     if (near) expected.set(pack_cell(x, y, z));
                 }
-        for (bool simd : {true, false}) {
+        for (const auto simd : {esf::detail::SimdLevel::kAvx512, esf::detail::SimdLevel::kAvx2,
+                                esf::detail::SimdLevel::kPortable}) {
             esf::detail::VoxelGrid dilated = grid;
             dilated.dilate(side, simd);
-            EXPECT_EQ(dilated.words, expected.words) << "side " << side << " simd " << simd;
+            EXPECT_EQ(dilated.words, expected.words)
+                << "side " << side << " simd level " << static_cast<int>(simd);
         }
     }
 }

@@ -247,7 +247,7 @@ EsfResult EsfEstimator::compute(std::span<const Eigen::Vector3f> input) {
                                     ws.grid))
             throw on_one_line();
     }
-    ws.grid.dilate(opt.grid_size, simd == detail::SimdLevel::kAvx512);
+    ws.grid.dilate(opt.grid_size, simd);
 
     // Random triples (Sec. III-C): `samples` accepted, degenerate ones redrawn.
     const auto samples = static_cast<std::size_t>(opt.samples);

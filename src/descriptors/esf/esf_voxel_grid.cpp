@@ -1,5 +1,7 @@
 #include "descriptors/esf/esf_voxel_grid.hpp"
 
+#include <algorithm>
+
 #include "core/simd.hpp"
 
 namespace esf::detail {
@@ -34,9 +36,12 @@ void dilate_portable(VoxelGrid::Words& words, int side) {
 
 }  // namespace
 
-void VoxelGrid::dilate(int side, bool simd) {
-    if (simd && avx512_available())
+void VoxelGrid::dilate(int side, SimdLevel simd) {
+    const SimdLevel level = std::min(simd, best_simd_level());
+    if (level == SimdLevel::kAvx512)
         dilate_avx512(words, side);
+    else if (level == SimdLevel::kAvx2)
+        dilate_avx2(words, side);
     else
         dilate_portable(words, side);
 }

@@ -5,6 +5,8 @@
 #include <array>
 #include <cstdint>
 
+#include "core/simd.hpp"
+
 namespace esf::detail {
 
 inline constexpr int kGridBits = 6;
@@ -24,12 +26,14 @@ struct alignas(64) VoxelGrid {
     void set(std::uint32_t cell) { words[cell >> 6] |= std::uint64_t{1} << (cell & 63); }
     bool occupied(std::uint32_t cell) const { return (words[cell >> 6] >> (cell & 63)) & 1; }
     /// Marks the 26 neighbours of every set cell too (the one-cell dilation of the reference),
-    /// clipped to the first `side` cells of each axis. `simd`: use AVX-512 where the CPU has it
-    /// (the same bits either way).
-    void dilate(int side, bool simd = true);
+    /// clipped to the first `side` cells of each axis. `simd`: the widest kernels to use, the
+    /// narrower where the CPU lacks them (the same bits on every level).
+    void dilate(int side, SimdLevel simd = SimdLevel::kAvx512);
 };
 
 /// VoxelGrid::dilate() with AVX-512 (the same bits); needs avx512_available().
 void dilate_avx512(VoxelGrid::Words& words, int side);
+/// VoxelGrid::dilate() with AVX2 (the same bits); needs avx2_available().
+void dilate_avx2(VoxelGrid::Words& words, int side);
 
 }  // namespace esf::detail
