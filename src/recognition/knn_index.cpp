@@ -4,7 +4,6 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
-#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -20,11 +19,13 @@ constexpr std::size_t kLaneBytes = 8;         // one SAD lane; one scale per lan
 constexpr std::size_t kSketchAlign = 16;      // sketch rows padded to whole 16-byte steps
 constexpr double kMaxLaneWeight = 65535.0;    // integer lane weights: 16 bits
 constexpr std::size_t kSampleRows = 4096;     // rows sampled to cut the first candidates
+constexpr std::size_t kCutMargin = 4;         // the cut: the (4 * seeds)-th smallest sampled bound
 constexpr std::size_t kMaxSketchBytes = std::size_t{1} << 27;  // 2^27 * 255 * 65535 < 2^52
 constexpr std::size_t kBuildBlock = 1024;                      // rows per build work item
 constexpr double kBoundShrink = 1.0 - 1e-9;          // relative slack taken off the sketch distance
-constexpr std::size_t kBoundBlockBytes = 24 * 1024;  // sketch rows per block of lower_bounds()
-constexpr std::size_t kBoundGroup = 8;     // queries of search_batch() per pass over the sketches
+constexpr std::size_t kBoundBlockBytes = 24 * 1024;  // sketch rows per block of a pass
+constexpr std::size_t kCacheLine = 64;               // bytes fetched by one prefetch
+constexpr std::size_t kBoundGroup = 16;    // queries of search_batch() per pass over the sketches
 constexpr double kErrorGrow = 1.0 + 1e-9;  // relative slack added to quantisation errors
 constexpr double kMagnitudeSlack = 1e-12;  // absolute slack per unit of magnitude
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -331,37 +332,119 @@ KnnResult KnnIndex::search(std::span<const float> query, std::size_t k) const {
     return search_checked(query, k);
 }
 
-void KnnIndex::lower_bounds(std::span<const float> queries, double* bounds) const {
-    const detail::KnnKernels distances = detail::knn_kernels(kernels_);
-    const std::size_t count = queries.size() / dimension_;
+void KnnIndex::sketch_queries(std::span<const float> queries, std::uint8_t* codes,
+                              double* errors) const {
     std::vector<double> values(stride_);
-    std::vector<std::uint8_t> codes(count * stride_);
-    std::vector<double> query_error(count);
-    for (std::size_t q = 0; q < count; ++q) {
+    for (std::size_t q = 0; q < queries.size() / dimension_; ++q) {
         const double magnitude = sketch_values(queries.data() + q * dimension_, weights_.data(),
                                                dimension_, group_, values);
-        query_error[q] = quantise_sketch(values, magnitude, codes.data() + q * stride_);
+        errors[q] = quantise_sketch(values, magnitude, codes + q * stride_);
     }
-    // Rows in blocks that stay in the first-level cache while every query passes over them:
-    // the sketches are read from memory once per batch instead of once per query.
+}
+
+void KnnIndex::collect_candidates(std::size_t count, const std::uint8_t* codes,
+                                  const double* errors, const double* limits,
+                                  const Candidate* after,
+                                  std::vector<Candidate>* candidates) const {
+    const detail::KnnKernels kernels = detail::knn_kernels(kernels_);
+    // Rows in blocks that stay in the first-level cache while every query passes over them: the
+    // sketches are read from memory once per pass, whatever the number of queries, and only the
+    // few rows under a query's limit leave the kernel.
     const std::size_t block = std::max<std::size_t>(8, kBoundBlockBytes / stride_ / 8 * 8);
+    std::vector<double> bound(block);
+    std::vector<std::uint32_t> row(block);
     for (std::size_t r = 0; r < rows_; r += block) {
         const std::size_t n = std::min(block, rows_ - r);
-        for (std::size_t q = 0; q < count; ++q)
-            distances.sketch(sketch_.data() + r * stride_, n, stride_, codes.data() + q * stride_,
-                             lane_weight_.data(), sketch_unit_, row_error_.data() + r,
-                             query_error[q], bounds + q * rows_ + r);
+        for (std::size_t q = 0; q < count; ++q) {
+            const std::size_t kept =
+                kernels.sketch(sketch_.data() + r * stride_, n, stride_, codes + q * stride_,
+                               lane_weight_.data(), sketch_unit_, row_error_.data() + r, errors[q],
+                               limits[q], static_cast<std::uint32_t>(r), bound.data(), row.data());
+            for (std::size_t i = 0; i < kept; ++i)
+                if (const Candidate candidate{bound[i], row[i]}; after[q] < candidate)
+                    candidates[q].push_back(candidate);
+        }
     }
+}
+
+std::size_t KnnIndex::wanted(std::size_t k) const {
+    return std::min(k, has_families() ? families_ : views_);
+}
+
+std::size_t KnnIndex::seed_count(std::size_t want) const {
+    // With families the seeds are as many rows as `want` families hold on average, so that they
+    // usually hold `want` families.
+    return has_families() ? std::min(rows_, want * ((rows_ + families_ - 1) / families_)) : want;
+}
+
+void KnnIndex::search_group(std::span<const float> queries, std::size_t k,
+                            KnnResult* results) const {
+    const std::size_t count = queries.size() / dimension_;
+    std::vector<std::uint8_t> codes(count * stride_);
+    std::vector<double> errors(count);
+    sketch_queries(queries, codes.data(), errors.data());
+
+    // Any `seeds` rows bound the seeds-th smallest bound from above, so a small rank of the
+    // bounds of a sample of rows (evenly spread) cuts the candidates for the first exact distances
+    // to a few. The cut is taken kCutMargin times further than the seeds need, so that it
+    // usually exceeds the k-th distance too: then one pass finds every candidate.
+    const std::size_t seeds = seed_count(wanted(k));
+    const std::size_t sample = std::min(rows_, std::max(kSampleRows, seeds));
+    const std::size_t rank = std::min(sample, kCutMargin * seeds);
+    std::vector<std::uint8_t> sample_codes;
+    std::vector<double> sample_errors;
+    const std::uint8_t* sample_sketch = sketch_.data();
+    const double* sample_error = row_error_.data();
+    if (sample < rows_) {
+        sample_codes.resize(sample * stride_);
+        sample_errors.resize(sample);
+        for (std::size_t i = 0; i < sample; ++i) {
+            const std::size_t r = i * rows_ / sample;
+            std::copy_n(sketch_.data() + r * stride_, stride_, sample_codes.data() + i * stride_);
+            sample_errors[i] = row_error_[r];
+        }
+        sample_sketch = sample_codes.data();
+        sample_error = sample_errors.data();
+    }
+    const detail::KnnKernels kernels = detail::knn_kernels(kernels_);
+    std::vector<double> sampled(sample);
+    std::vector<std::uint32_t> sampled_rows(sample);
+    std::vector<double> cuts(count);
+    for (std::size_t q = 0; q < count; ++q) {
+        kernels.sketch(sample_sketch, sample, stride_, codes.data() + q * stride_,
+                       lane_weight_.data(), sketch_unit_, sample_error, errors[q], kInf, 0,
+                       sampled.data(), sampled_rows.data());
+        std::nth_element(sampled.begin(), sampled.begin() + static_cast<std::ptrdiff_t>(rank - 1),
+                         sampled.end());
+        cuts[q] = sampled[rank - 1];
+    }
+
+    std::vector<std::vector<Candidate>> below_cut(count);
+    const std::vector<Candidate> from_start(count, Candidate{-kInf, 0});
+    collect_candidates(count, codes.data(), errors.data(), cuts.data(), from_start.data(),
+                       below_cut.data());
+    for (std::size_t q = 0; q < count; ++q)
+        results[q] = search_bounded(queries.subspan(q * dimension_, dimension_), k,
+                                    codes.data() + q * stride_, errors[q], cuts[q], below_cut[q]);
 }
 
 KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) const {
-    const auto bound = std::make_unique_for_overwrite<double[]>(rows_);  // written in full
-    lower_bounds(query, bound.get());
-    return search_bounded(query, k, bound.get());
+    KnnResult result;
+    search_group(query, k, &result);
+    return result;
+}
+
+void KnnIndex::prefetch_row(std::size_t row) const {
+    // The rows refined lie anywhere in memory: fetching the next one while the current one is
+    // refined hides most of the memory latency.
+    const char* begin = reinterpret_cast<const char*>(data_.data() + row * dimension_);
+    const char* end = reinterpret_cast<const char*>(data_.data() + (row + 1) * dimension_);
+    for (const char* line = begin; line < end; line += kCacheLine) __builtin_prefetch(line);
 }
 
 KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
-                                   double* bound) const {
+                                   const std::uint8_t* codes, double error, double cut,
+                                   std::vector<Candidate>& below_cut) const {
     const detail::KnnKernels distances = detail::knn_kernels(kernels_);
 
     // Optimal multi-step search (Seidl & Kriegel): lower bounds of all rows (see the header);
@@ -369,14 +452,15 @@ KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
     // then exact distances for the other rows whose bound does not exceed the k-th distance,
     // in increasing bound order, until the next bound exceeds it. The result does not depend
     // on the order; the order only makes the k-th distance fall fast.
-    const std::size_t want = std::min(k, has_families() ? families_ : views_);
+    const std::size_t want = wanted(k);
     TopViews top(want, grouped() || has_families());
     KnnResult result;
-    using Candidate = std::pair<double, std::uint32_t>;  // (lower bound, row)
     const auto refine = [&](std::vector<Candidate>& candidates) {
         std::sort(candidates.begin(), candidates.end());
-        for (const auto& [row_bound, row] : candidates) {
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+            const auto [row_bound, row] = candidates[i];
             if (row_bound > top.threshold()) break;
+            if (i + 1 < candidates.size()) prefetch_row(candidates[i + 1].second);
             const std::uint32_t view = view_of(row);
             top.offer(family_of(view), view, row,
                       distances.exact(query.data(), data_.data() + row * dimension_,
@@ -385,27 +469,15 @@ KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
         }
     };
 
-    const auto rows_below = [&](double limit, std::vector<Candidate>& out) {
-        for (std::size_t r = 0; r < rows_; ++r)
-            if (bound[r] <= limit) out.emplace_back(bound[r], static_cast<std::uint32_t>(r));
-    };
-
-    // Any `seeds` rows bound the seeds-th smallest bound from above, so the seeds-th smallest
-    // bound of a sample of rows cuts the candidates for the first exact distances to a few. With
-    // families the seeds are as many rows as `want` families hold on average, so that they
-    // usually hold `want` families.
-    const std::size_t seeds =
-        has_families() ? std::min(rows_, want * ((rows_ + families_ - 1) / families_)) : want;
-    const std::size_t sample = std::min(rows_, std::max(kSampleRows, seeds));
-    std::vector<double> sampled(sample);
-    for (std::size_t i = 0; i < sample; ++i) sampled[i] = bound[i * rows_ / sample];
-    std::nth_element(sampled.begin(), sampled.begin() + static_cast<std::ptrdiff_t>(seeds - 1),
-                     sampled.end());
-    const double cut = sampled[seeds - 1];
-    std::vector<Candidate> below_cut;
-    rows_below(cut, below_cut);
+    // The seeds: the `seeds` smallest (bound, row) pairs, all below the cut; the other rows are
+    // the pairs after the last seed.
+    const std::size_t seeds = seed_count(want);
     const auto seeds_end = below_cut.begin() + static_cast<std::ptrdiff_t>(seeds);
     std::nth_element(below_cut.begin(), seeds_end - 1, below_cut.end());
+    const Candidate last_seed = *(seeds_end - 1);
+    const auto rows_below = [&](double limit, std::vector<Candidate>& out) {
+        collect_candidates(1, codes, &error, &limit, &last_seed, &out);
+    };
     std::vector<Candidate> candidates(below_cut.begin(), seeds_end);
     refine(candidates);
 
@@ -413,10 +485,8 @@ KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
     // infinite: then the other rows are refined in batches of the smallest bounds, each twice
     // the last, until `want` views or families are held.
     if (top.threshold() == kInf) {
-        for (auto it = below_cut.begin(); it != seeds_end; ++it) bound[it->second] = kInf;
         std::vector<Candidate> rest;
         rows_below(kInf, rest);
-        std::erase_if(rest, [](const Candidate& c) { return c.first == kInf; });
         auto begin = rest.begin();
         for (std::size_t batch = 4 * want; top.threshold() == kInf && begin != rest.end();
              batch *= 2) {
@@ -437,16 +507,15 @@ KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
         return result;
     }
 
-    // The others whose bound does not exceed the k-th distance.
+    // The others whose bound does not exceed the k-th distance: among those below the cut when
+    // it is not below the k-th distance, else from another pass over the sketches.
     const double threshold = top.threshold();
     candidates.clear();
-    if (threshold <= cut) {
+    if (threshold <= cut)
         std::copy_if(seeds_end, below_cut.end(), std::back_inserter(candidates),
                      [&](const Candidate& c) { return c.first <= threshold; });
-    } else {
-        for (auto it = below_cut.begin(); it != seeds_end; ++it) bound[it->second] = kInf;
+    else
         rows_below(threshold, candidates);
-    }
     refine(candidates);
     result.neighbours = top.take();
     return result;
@@ -464,8 +533,8 @@ std::vector<KnnResult> KnnIndex::search_batch(std::span<const float> queries, st
     const std::size_t count = queries.size() / dimension_;
     for (std::size_t q = 0; q < count; ++q)
         check_query(queries.subspan(q * dimension_, dimension_), "query " + std::to_string(q));
-    // Queries in groups of up to kBoundGroup share one pass over the sketches (lower_bounds), as
-    // many groups as threads when there are fewer queries than that.
+    // Queries in groups of up to kBoundGroup share each pass over the sketches (search_group),
+    // as many groups as threads when there are fewer queries than that.
     const std::size_t workers = static_cast<std::size_t>(resolve_threads(threads));
     const std::size_t groups =
         std::min(count, std::max((count + kBoundGroup - 1) / kBoundGroup, workers));
@@ -473,11 +542,8 @@ std::vector<KnnResult> KnnIndex::search_batch(std::span<const float> queries, st
     parallel_for(groups, threads, [&](std::size_t g) {
         const std::size_t begin = g * count / groups;
         const std::size_t end = (g + 1) * count / groups;
-        const auto bounds = std::make_unique_for_overwrite<double[]>((end - begin) * rows_);
-        lower_bounds(queries.subspan(begin * dimension_, (end - begin) * dimension_), bounds.get());
-        for (std::size_t q = begin; q < end; ++q)
-            results[q] = search_bounded(queries.subspan(q * dimension_, dimension_), k,
-                                        bounds.get() + (q - begin) * rows_);
+        search_group(queries.subspan(begin * dimension_, (end - begin) * dimension_), k,
+                     results.data() + begin);
     });
     return results;
 }

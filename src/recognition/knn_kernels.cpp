@@ -19,22 +19,28 @@ double exact_scalar(const float* a, const float* b, const float* w, std::size_t 
     return combine_lanes(lane);
 }
 
-void sketch_scalar(const std::uint8_t* rows, std::size_t count, std::size_t stride,
-                   const std::uint8_t* query, const std::uint32_t* weight, double unit,
-                   const double* row_error, double query_error, double* bound) {
+std::size_t sketch_scalar(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                          const std::uint8_t* query, const std::uint32_t* weight, double unit,
+                          const double* row_error, double query_error, double limit,
+                          std::uint32_t first_row, double* bound, std::uint32_t* row) {
     const std::size_t lanes = stride / 8;
+    std::size_t kept = 0;
     for (std::size_t r = 0; r < count; ++r) {
-        const std::uint8_t* row = rows + r * stride;
+        const std::uint8_t* codes = rows + r * stride;
         std::uint64_t sum = 0;
         for (std::size_t l = 0; l < lanes; ++l) {
             std::uint32_t sad = 0;
             for (std::size_t j = 8 * l; j < 8 * l + 8; ++j)
                 sad += static_cast<std::uint32_t>(
-                    std::abs(static_cast<int>(row[j]) - static_cast<int>(query[j])));
+                    std::abs(static_cast<int>(codes[j]) - static_cast<int>(query[j])));
             sum += std::uint64_t{weight[l]} * sad;
         }
-        bound[r] = (unit * static_cast<double>(sum) - row_error[r]) - query_error;
+        const double row_bound = (unit * static_cast<double>(sum) - row_error[r]) - query_error;
+        if (row_bound <= limit)
+            kept = keep_rows(&row_bound, 1u, first_row + static_cast<std::uint32_t>(r), kept, bound,
+                             row);
     }
+    return kept;
 }
 
 }  // namespace

@@ -28,13 +28,17 @@ inline constexpr std::size_t kExactCheck = 128;
 
 /// Lower bounds for `count` rows of `stride` bytes (a multiple of 16) starting at `rows`, with
 /// `weight` padded with zeros to a multiple of 8 lanes (of 8 bytes):
-///     bound[r] = (unit * S_r - row_error[r]) - query_error,
+///     bound_r = (unit * S_r - row_error[r]) - query_error,
 ///     S_r = sum over lanes l of weight[l] * sum_{j in l} |query_j - row_j|,
 /// S_r taken exactly in 64-bit integers (it must stay below 2^52), so that every kernel returns
-/// bit-identical values.
-using SketchFn = void (*)(const std::uint8_t* rows, std::size_t count, std::size_t stride,
-                          const std::uint8_t* query, const std::uint32_t* weight, double unit,
-                          const double* row_error, double query_error, double* bound);
+/// bit-identical values. Only the bounds that do not exceed `limit` are kept: they are written
+/// in row order to `bound`, with their row numbers first_row + r to `row`, and the kernel
+/// returns how many it wrote (at most `count`; all of them when `limit` is +infinity).
+using SketchFn = std::size_t (*)(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                                 const std::uint8_t* query, const std::uint32_t* weight,
+                                 double unit, const double* row_error, double query_error,
+                                 double limit, std::uint32_t first_row, double* bound,
+                                 std::uint32_t* row);
 
 struct KnnKernels {
     ExactL1Fn exact;
@@ -47,13 +51,29 @@ KnnKernels knn_kernels(Kernels kernels);
 
 // The kernels of each instruction set.
 double exact_avx2(const float* a, const float* b, const float* w, std::size_t n, double limit);
-void sketch_avx2(const std::uint8_t* rows, std::size_t count, std::size_t stride,
-                 const std::uint8_t* query, const std::uint32_t* weight, double unit,
-                 const double* row_error, double query_error, double* bound);
+std::size_t sketch_avx2(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                        const std::uint8_t* query, const std::uint32_t* weight, double unit,
+                        const double* row_error, double query_error, double limit,
+                        std::uint32_t first_row, double* bound, std::uint32_t* row);
 double exact_avx512(const float* a, const float* b, const float* w, std::size_t n, double limit);
-void sketch_avx512(const std::uint8_t* rows, std::size_t count, std::size_t stride,
-                   const std::uint8_t* query, const std::uint32_t* weight, double unit,
-                   const double* row_error, double query_error, double* bound);
+std::size_t sketch_avx512(const std::uint8_t* rows, std::size_t count, std::size_t stride,
+                          const std::uint8_t* query, const std::uint32_t* weight, double unit,
+                          const double* row_error, double query_error, double limit,
+                          std::uint32_t first_row, double* bound, std::uint32_t* row);
+
+/// The sketch kernels' output of a run of rows: bounds[i] (row first_row + i) for every bit i
+/// set in `below` (the rows whose bound does not exceed the limit), appended to bound[kept] and
+/// row[kept]; returns the new number kept.
+inline std::size_t keep_rows(const double* bounds, unsigned below, std::uint32_t first_row,
+                             std::size_t kept, double* bound, std::uint32_t* row) {
+    for (; below != 0; below &= below - 1) {
+        const auto i = static_cast<std::uint32_t>(__builtin_ctz(below));
+        bound[kept] = bounds[i];
+        row[kept] = first_row + i;
+        ++kept;
+    }
+    return kept;
+}
 
 /// The fixed pairwise combination of the eight lanes shared by every exact kernel.
 inline double combine_lanes(const double* lane) {

@@ -51,9 +51,12 @@ ESF_TARGET_AVX2 inline __m256i load256(const std::uint8_t* at) {
 }
 
 /// Transposed sums of four rows' lane sums ([a0+a1 b0+b1 | a2+a3 b2+b3], then across the
-/// halves: [a b c d]), turned into bounds.
-ESF_TARGET_AVX2 inline void store_bounds4(const __m256i* p, __m256d scale, const double* row_error,
-                                          __m256d query_error, double* bound) {
+/// halves: [a b c d]), turned into bounds and kept where they do not exceed the limit.
+ESF_TARGET_AVX2 inline std::size_t keep_bounds4(const __m256i* p, __m256d scale,
+                                                const double* row_error, __m256d query_error,
+                                                __m256d limit, std::uint32_t first_row,
+                                                std::size_t kept, double* bound,
+                                                std::uint32_t* row) {
     const __m256i t01 =
         _mm256_add_epi64(_mm256_unpacklo_epi64(p[0], p[1]), _mm256_unpackhi_epi64(p[0], p[1]));
     const __m256i t23 =
@@ -61,8 +64,14 @@ ESF_TARGET_AVX2 inline void store_bounds4(const __m256i* p, __m256d scale, const
     const __m256i total = _mm256_add_epi64(_mm256_permute2x128_si256(t01, t23, 0x20),
                                            _mm256_permute2x128_si256(t01, t23, 0x31));
     const __m256d estimate = _mm256_mul_pd(u52_to_double(total), scale);
-    _mm256_storeu_pd(
-        bound, _mm256_sub_pd(_mm256_sub_pd(estimate, _mm256_loadu_pd(row_error)), query_error));
+    const __m256d bounds =
+        _mm256_sub_pd(_mm256_sub_pd(estimate, _mm256_loadu_pd(row_error)), query_error);
+    const auto below =
+        static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(bounds, limit, _CMP_LE_OQ)));
+    if (below == 0) return kept;
+    alignas(32) double values[4];
+    _mm256_store_pd(values, bounds);
+    return keep_rows(values, below, first_row, kept, bound, row);
 }
 
 }  // namespace
@@ -97,13 +106,17 @@ ESF_TARGET_AVX2 double exact_avx2(const float* a, const float* b, const float* w
     return combine_lanes(lane);
 }
 
-ESF_TARGET_AVX2 void sketch_avx2(const std::uint8_t* rows, std::size_t count, std::size_t stride,
-                                 const std::uint8_t* query, const std::uint32_t* weight,
-                                 double unit, const double* row_error, double query_error,
-                                 double* bound) {
+ESF_TARGET_AVX2 std::size_t sketch_avx2(const std::uint8_t* rows, std::size_t count,
+                                        std::size_t stride, const std::uint8_t* query,
+                                        const std::uint32_t* weight, double unit,
+                                        const double* row_error, double query_error, double limit,
+                                        std::uint32_t first_row, double* bound,
+                                        std::uint32_t* row) {
     const __m256d scale = _mm256_set1_pd(unit);
     const __m256d error = _mm256_set1_pd(query_error);
+    const __m256d limits = _mm256_set1_pd(limit);
     std::size_t r = 0;
+    std::size_t kept = 0;
     __m256i p[4];
     if (stride == 64) {  // two SADs per row: every default sketch up to 4096 dimensions
         const __m256i q0 = load256(query), q1 = load256(query + 32);
@@ -113,18 +126,20 @@ ESF_TARGET_AVX2 void sketch_avx2(const std::uint8_t* rows, std::size_t count, st
             _mm256_cvtepu32_epi64(_mm_loadu_si128(reinterpret_cast<const __m128i*>(weight + 4)));
         for (; r + 4 <= count; r += 4) {
             for (std::size_t i = 0; i < 4; ++i) {
-                const std::uint8_t* row = rows + (r + i) * 64;
-                p[i] =
-                    _mm256_add_epi64(_mm256_mul_epu32(_mm256_sad_epu8(load256(row), q0), w0),
-                                     _mm256_mul_epu32(_mm256_sad_epu8(load256(row + 32), q1), w1));
+                const std::uint8_t* codes = rows + (r + i) * 64;
+                p[i] = _mm256_add_epi64(
+                    _mm256_mul_epu32(_mm256_sad_epu8(load256(codes), q0), w0),
+                    _mm256_mul_epu32(_mm256_sad_epu8(load256(codes + 32), q1), w1));
             }
-            store_bounds4(p, scale, row_error + r, error, bound + r);
+            kept = keep_bounds4(p, scale, row_error + r, error, limits,
+                                first_row + static_cast<std::uint32_t>(r), kept, bound, row);
         }
     }
     for (; r + 4 <= count; r += 4) {
         for (std::size_t i = 0; i < 4; ++i)
             p[i] = weighted_sad_avx2(rows + (r + i) * stride, query, weight, stride);
-        store_bounds4(p, scale, row_error + r, error, bound + r);
+        kept = keep_bounds4(p, scale, row_error + r, error, limits,
+                            first_row + static_cast<std::uint32_t>(r), kept, bound, row);
     }
     for (; r < count; ++r) {
         alignas(32) std::uint64_t part[4];
@@ -132,8 +147,12 @@ ESF_TARGET_AVX2 void sketch_avx2(const std::uint8_t* rows, std::size_t count, st
                            weighted_sad_avx2(rows + r * stride, query, weight, stride));
         const double estimate =
             unit * static_cast<double>((part[0] + part[1]) + (part[2] + part[3]));
-        bound[r] = (estimate - row_error[r]) - query_error;
+        const double row_bound = (estimate - row_error[r]) - query_error;
+        if (row_bound <= limit)
+            kept = keep_rows(&row_bound, 1u, first_row + static_cast<std::uint32_t>(r), kept, bound,
+                             row);
     }
+    return kept;
 }
 
 }  // namespace esf::detail

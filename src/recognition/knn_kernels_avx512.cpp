@@ -56,15 +56,23 @@ ESF_TARGET_AVX512 inline __m512i block_sums(__m512i a, __m512i b) {
                             _mm512_shuffle_i64x2(a, b, _MM_SHUFFLE(3, 1, 3, 1)));
 }
 
-/// Transposed sums of eight rows' lane sums (row i's total in lane i), turned into bounds.
-ESF_TARGET_AVX512 inline void store_bounds8(const __m512i* p, __m512d scale,
-                                            const double* row_error, __m512d query_error,
-                                            double* bound) {
+/// Transposed sums of eight rows' lane sums (row i's total in lane i), turned into bounds and
+/// kept where they do not exceed the limit.
+ESF_TARGET_AVX512 inline std::size_t keep_bounds8(const __m512i* p, __m512d scale,
+                                                  const double* row_error, __m512d query_error,
+                                                  __m512d limit, std::uint32_t first_row,
+                                                  std::size_t kept, double* bound,
+                                                  std::uint32_t* row) {
     const __m512i total = block_sums(block_sums(pair_sums(p[0], p[1]), pair_sums(p[2], p[3])),
                                      block_sums(pair_sums(p[4], p[5]), pair_sums(p[6], p[7])));
     const __m512d estimate = _mm512_mul_pd(u52_to_double(total), scale);
-    _mm512_storeu_pd(
-        bound, _mm512_sub_pd(_mm512_sub_pd(estimate, _mm512_loadu_pd(row_error)), query_error));
+    const __m512d bounds =
+        _mm512_sub_pd(_mm512_sub_pd(estimate, _mm512_loadu_pd(row_error)), query_error);
+    const __mmask8 below = _mm512_cmp_pd_mask(bounds, limit, _CMP_LE_OQ);
+    if (below == 0) return kept;
+    alignas(64) double values[8];
+    _mm512_store_pd(values, bounds);
+    return keep_rows(values, below, first_row, kept, bound, row);
 }
 
 }  // namespace
@@ -89,13 +97,17 @@ ESF_TARGET_AVX512 double exact_avx512(const float* a, const float* b, const floa
     return combine_lanes(lane);
 }
 
-ESF_TARGET_AVX512 void sketch_avx512(const std::uint8_t* rows, std::size_t count,
-                                     std::size_t stride, const std::uint8_t* query,
-                                     const std::uint32_t* weight, double unit,
-                                     const double* row_error, double query_error, double* bound) {
+ESF_TARGET_AVX512 std::size_t sketch_avx512(const std::uint8_t* rows, std::size_t count,
+                                            std::size_t stride, const std::uint8_t* query,
+                                            const std::uint32_t* weight, double unit,
+                                            const double* row_error, double query_error,
+                                            double limit, std::uint32_t first_row, double* bound,
+                                            std::uint32_t* row) {
     const __m512d scale = _mm512_set1_pd(unit);
     const __m512d error = _mm512_set1_pd(query_error);
+    const __m512d limits = _mm512_set1_pd(limit);
     std::size_t r = 0;
+    std::size_t kept = 0;
     __m512i p[8];
     if (stride == 64) {  // one SAD per row: every default sketch up to 4096 dimensions
         const __m512i q = _mm512_loadu_si512(query);
@@ -105,20 +117,26 @@ ESF_TARGET_AVX512 void sketch_avx512(const std::uint8_t* rows, std::size_t count
             for (std::size_t i = 0; i < 8; ++i)
                 p[i] = _mm512_mul_epu32(_mm512_sad_epu8(_mm512_loadu_si512(rows + (r + i) * 64), q),
                                         w);
-            store_bounds8(p, scale, row_error + r, error, bound + r);
+            kept = keep_bounds8(p, scale, row_error + r, error, limits,
+                                first_row + static_cast<std::uint32_t>(r), kept, bound, row);
         }
     }
     for (; r + 8 <= count; r += 8) {
         for (std::size_t i = 0; i < 8; ++i)
             p[i] = weighted_sad_avx512(rows + (r + i) * stride, query, weight, stride);
-        store_bounds8(p, scale, row_error + r, error, bound + r);
+        kept = keep_bounds8(p, scale, row_error + r, error, limits,
+                            first_row + static_cast<std::uint32_t>(r), kept, bound, row);
     }
     for (; r < count; ++r) {
         const __m512i part = weighted_sad_avx512(rows + r * stride, query, weight, stride);
         const double estimate =
             unit * static_cast<double>(static_cast<std::uint64_t>(_mm512_reduce_add_epi64(part)));
-        bound[r] = (estimate - row_error[r]) - query_error;
+        const double row_bound = (estimate - row_error[r]) - query_error;
+        if (row_bound <= limit)
+            kept = keep_rows(&row_bound, 1u, first_row + static_cast<std::uint32_t>(r), kept, bound,
+                             row);
     }
+    return kept;
 }
 
 }  // namespace esf::detail

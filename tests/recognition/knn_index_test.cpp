@@ -300,6 +300,61 @@ TEST(KnnIndex, FamiliesMatchBruteForce) {
     }
 }
 
+TEST(KnnIndex, LargeBatchesMatchSingleQueriesAndBruteForce) {
+    // More rows than the search samples for its cut (4096) and than one block of a pass, and
+    // full groups of 16 queries that share every pass: a batch gives the single queries'
+    // results bit for bit, and brute force's. k = 1 cuts close, so that the k-th distance
+    // often lies beyond the cut and needs a second pass; the skewed families leave the seeds
+    // in one family, so that the rest of the rows are refined in batches.
+    const std::size_t dim = esf::kEsfSize, n = 6000;
+    const std::vector<float> rows = rows_with_duplicates(n, dim, 53);
+    std::vector<float> queries = make_queries(rows, dim, 59);
+    const std::vector<float> fresh = esf::detail::esf_like_rows(21, dim, 61, 1);
+    queries.insert(queries.end(), fresh.begin(), fresh.end());
+    const std::size_t count = queries.size() / dim;
+    ASSERT_EQ(count, 32u);
+    std::vector<std::uint32_t> skewed(n);
+    for (std::size_t v = 0; v < n; ++v)
+        skewed[v] = v % 30 == 0 ? static_cast<std::uint32_t>(1 + v / 30) : 0;
+    const std::size_t k_max = 50;
+    std::vector<std::vector<KnnNeighbour>> want_views(count), want_families(count);
+    for (std::size_t q = 0; q < count; ++q) {
+        const std::span<const float> query(queries.data() + q * dim, dim);
+        want_views[q] = brute_force(rows, dim, {}, query, {}, k_max);
+        want_families[q] = brute_force_families(rows, dim, {}, skewed, query, k_max);
+    }
+    for (Kernels kernel : supported_kernels()) {
+        for (const bool families : {false, true}) {
+            KnnIndexOptions options;
+            options.kernels = kernel;
+            if (families) options.view_families = skewed;
+            const KnnIndex index(rows, dim, options);
+            for (std::size_t k : {std::size_t{1}, std::size_t{10}, k_max}) {
+                const std::string what = std::string(esf::to_string(kernel)) +
+                                         (families ? " families" : " views") + " k " +
+                                         std::to_string(k);
+                const auto one_thread = index.search_batch(queries, k, 1);
+                const auto two_threads = index.search_batch(queries, k, 2);
+                ASSERT_EQ(one_thread.size(), count);
+                ASSERT_EQ(two_threads.size(), count);
+                for (std::size_t q = 0; q < count; ++q) {
+                    const std::span<const float> query(queries.data() + q * dim, dim);
+                    const esf::KnnResult single = index.search(query, k);
+                    const std::string at = what + " query " + std::to_string(q);
+                    expect_identical(one_thread[q].neighbours, single.neighbours, at);
+                    expect_identical(two_threads[q].neighbours, single.neighbours, at);
+                    EXPECT_EQ(one_thread[q].exact_distances, single.exact_distances) << at;
+                    const auto& all = families ? want_families[q] : want_views[q];
+                    expect_same(single.neighbours,
+                                {all.begin(), all.begin() + static_cast<std::ptrdiff_t>(
+                                                                std::min(k, all.size()))},
+                                at);
+                }
+            }
+        }
+    }
+}
+
 TEST(KnnIndex, OddDataStaysExact) {
     // Negative values, constant dimensions, queries far outside the indexed range, every
     // sketch grouping from 1 to the whole row.

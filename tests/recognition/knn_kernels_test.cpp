@@ -22,6 +22,8 @@
 namespace esf::test {
 namespace {
 
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
 TEST(KnnKernels, ExactDistanceIsBitIdenticalToScalar) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> value(-1.0f, 1.0f);
@@ -75,10 +77,16 @@ TEST(KnnKernels, SketchBoundIsBitIdenticalToScalar) {
                 for (double& e : row_error) e = error(rng);
                 const double unit = 3.7e-9, query_error = 2.5e-4;
                 std::vector<double> got(count), want(count);
-                k.sketch(rows.data(), count, stride, query.data(), lane_weight.data(), unit,
-                         row_error.data(), query_error, got.data());
-                scalar.sketch(rows.data(), count, stride, query.data(), lane_weight.data(), unit,
-                              row_error.data(), query_error, want.data());
+                std::vector<std::uint32_t> got_rows(count), want_rows(count);
+                const std::uint32_t first_row = 1000;
+                EXPECT_EQ(k.sketch(rows.data(), count, stride, query.data(), lane_weight.data(),
+                                   unit, row_error.data(), query_error, kInf, first_row, got.data(),
+                                   got_rows.data()),
+                          count);
+                EXPECT_EQ(scalar.sketch(rows.data(), count, stride, query.data(),
+                                        lane_weight.data(), unit, row_error.data(), query_error,
+                                        kInf, first_row, want.data(), want_rows.data()),
+                          count);
                 for (std::size_t r = 0; r < count; ++r) {
                     std::uint64_t sum = 0;  // independent of both kernels
                     for (std::size_t j = 0; j < stride; ++j)
@@ -87,8 +95,33 @@ TEST(KnnKernels, SketchBoundIsBitIdenticalToScalar) {
                                                         static_cast<int>(query[j])));
                     EXPECT_EQ(want[r],
                               (unit * static_cast<double>(sum) - row_error[r]) - query_error);
+                    EXPECT_EQ(want_rows[r], first_row + r);
                     EXPECT_EQ(got[r], want[r]) << esf::to_string(kernel) << " stride " << stride
                                                << " count " << count << " row " << r;
+                    EXPECT_EQ(got_rows[r], want_rows[r]);
+                }
+                // With a limit (the median, and one below every bound): only the rows whose
+                // bound does not exceed it, in row order.
+                std::vector<double> sorted = want;
+                std::sort(sorted.begin(), sorted.end());
+                for (const double limit : {sorted[count / 2], sorted.front() - 1.0}) {
+                    std::vector<double> kept_bounds;
+                    std::vector<std::uint32_t> kept_rows;
+                    for (std::size_t r = 0; r < count; ++r) {
+                        if (want[r] > limit) continue;
+                        kept_bounds.push_back(want[r]);
+                        kept_rows.push_back(first_row + static_cast<std::uint32_t>(r));
+                    }
+                    std::vector<double> below(count);
+                    std::vector<std::uint32_t> below_rows(count);
+                    const std::size_t kept =
+                        k.sketch(rows.data(), count, stride, query.data(), lane_weight.data(), unit,
+                                 row_error.data(), query_error, limit, first_row, below.data(),
+                                 below_rows.data());
+                    below.resize(kept);
+                    below_rows.resize(kept);
+                    EXPECT_EQ(below, kept_bounds) << esf::to_string(kernel) << " limit " << limit;
+                    EXPECT_EQ(below_rows, kept_rows);
                 }
             }
         }

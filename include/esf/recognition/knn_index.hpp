@@ -24,6 +24,13 @@
 //     rows that cannot be among the k nearest are skipped. For ESF-like data about 150 of
 //     300,000 rows need an exact distance for k = 10.
 //
+// No bound is stored: the bounds of a sample of 4,096 rows set a cut (a small rank of them), and
+// one pass over the sketches keeps only the rows whose bound falls under it (about
+// 4 * k * rows / 4096 of them: 3,000 of 300,000 for k = 10), enough for both steps unless the k-th
+// distance lies beyond the cut; then a second pass collects the rows under the k-th distance.
+// A batch shares each pass among up to 16 queries, so the sketches are read from memory once
+// for all of them.
+//
 // Exact distances are accumulated in double in a fixed order (eight lanes, lane i % 8, combined
 // pairwise), which every kernel (portable, AVX2, AVX-512) reproduces bit for bit; the sketch
 // bounds are integer sums, also bit-identical. Results do not depend on the CPU or the number of
@@ -40,8 +47,10 @@
 //
 // Memory per view (one row each): 4 * dimension bytes (the float row) + the sketch (64 bytes for
 // any dimension up to 4096 with the default group) + 8 bytes (its quantisation error): 2,632
-// bytes for ESF; + 4 bytes per row with groups. A search also allocates 8 bytes per row for the
-// bounds while it runs.
+// bytes for ESF; + 4 bytes per row with groups. A search allocates little besides: the rows
+// under its cut (16 bytes each; about 10,000 at 1 million rows for k = 10), a copy of the
+// sample's sketches (4,096 rows: 300 KB for ESF), and 16 bytes per row when groups or families
+// leave the first rows short of k views or families.
 //
 // Thread safety: a built index is immutable; search() and search_batch() are const and may run
 // concurrently from any number of threads.
@@ -50,6 +59,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "esf/core/kernels.hpp"
@@ -159,12 +169,30 @@ class KnnIndex {
     void check_query(std::span<const float> query, const std::string& what) const;
     double quantise_sketch(std::span<const double> values, double magnitude,
                            std::uint8_t* codes) const;
+    /// A row and its lower bound for one query: (lower bound, row).
+    using Candidate = std::pair<double, std::uint32_t>;
+    /// Sketch codes (sketch_bytes() each) and quantisation errors of the queries.
+    void sketch_queries(std::span<const float> queries, std::uint8_t* codes, double* errors) const;
+    /// One pass over the sketches for `count` queries: appends to candidates[q] every row whose
+    /// lower bound for query q (codes + q * sketch_bytes(), errors[q]) does not exceed limits[q]
+    /// and whose (bound, row) comes after after[q], in row order.
+    void collect_candidates(std::size_t count, const std::uint8_t* codes, const double* errors,
+                            const double* limits, const Candidate* after,
+                            std::vector<Candidate>* candidates) const;
+    /// The number of results of a search for k: k, or fewer views or families.
+    std::size_t wanted(std::size_t k) const;
+    /// The rows refined first (those with the smallest bounds) for `want` results.
+    std::size_t seed_count(std::size_t want) const;
     KnnResult search_checked(std::span<const float> query, std::size_t k) const;
-    /// Lower bounds of every row's distance to each of queries.size() / dimension() queries:
-    /// bounds[q * rows() + r].
-    void lower_bounds(std::span<const float> queries, double* bounds) const;
-    /// The search of one query given its rows' lower bounds (overwritten as it goes).
-    KnnResult search_bounded(std::span<const float> query, std::size_t k, double* bound) const;
+    /// Searches queries.size() / dimension() checked queries, sharing the passes over the
+    /// sketches that find their candidates; results[q] is query q's.
+    void search_group(std::span<const float> queries, std::size_t k, KnnResult* results) const;
+    /// Starts fetching row `row` into the cache.
+    void prefetch_row(std::size_t row) const;
+    /// The search of one query (sketch `codes`, quantisation error `error`) given the rows
+    /// whose bounds do not exceed `cut`, at least seed_count() of them (reordered as it goes).
+    KnnResult search_bounded(std::span<const float> query, std::size_t k, const std::uint8_t* codes,
+                             double error, double cut, std::vector<Candidate>& below_cut) const;
 
     std::size_t dimension_ = 0;
     std::size_t rows_ = 0;
