@@ -18,7 +18,8 @@ constexpr std::size_t kMaxSketchValues = 64;  // default sketch: at most 64 sums
 constexpr std::size_t kLaneBytes = 8;         // one SAD lane; one scale per lane
 constexpr std::size_t kSketchAlign = 16;      // sketch rows padded to whole 16-byte steps
 constexpr double kMaxLaneWeight = 65535.0;    // integer lane weights: 16 bits
-constexpr std::size_t kSampleRows = 4096;     // rows sampled to cut the first candidates
+constexpr std::size_t kSampleRows = 4096;     // rows sampled to cut the first candidates,
+constexpr std::size_t kSampleShare = 8;       // but at most one row in 8
 constexpr std::size_t kCutMargin = 4;         // the cut: the (4 * seeds)-th smallest sampled bound
 constexpr std::size_t kMaxSketchBytes = std::size_t{1} << 27;  // 2^27 * 255 * 65535 < 2^52
 constexpr std::size_t kBuildBlock = 1024;                      // rows per build work item
@@ -385,11 +386,13 @@ void KnnIndex::search_group(std::span<const float> queries, std::size_t k,
     sketch_queries(queries, codes.data(), errors.data());
 
     // Any `seeds` rows bound the seeds-th smallest bound from above, so a small rank of the
-    // bounds of a sample of rows (evenly spread) cuts the candidates for the first exact distances
-    // to a few. The cut is taken kCutMargin times further than the seeds need, so that it
-    // usually exceeds the k-th distance too: then one pass finds every candidate.
+    // bounds of a sample of rows (evenly spread, and few: the sample is read besides the pass)
+    // cuts the candidates for the first exact distances to a few. The cut is taken kCutMargin
+    // times further than the seeds need, so that it usually exceeds the k-th distance too: then
+    // one pass finds every candidate.
     const std::size_t seeds = seed_count(wanted(k));
-    const std::size_t sample = std::min(rows_, std::max(kSampleRows, seeds));
+    const std::size_t sample =
+        std::min(rows_, std::max(seeds, std::min(kSampleRows, rows_ / kSampleShare)));
     const std::size_t rank = std::min(sample, kCutMargin * seeds);
     std::vector<std::uint8_t> sample_codes;
     std::vector<double> sample_errors;

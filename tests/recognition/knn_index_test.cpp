@@ -301,8 +301,8 @@ TEST(KnnIndex, FamiliesMatchBruteForce) {
 }
 
 TEST(KnnIndex, LargeBatchesMatchSingleQueriesAndBruteForce) {
-    // More rows than the search samples for its cut (4096) and than one block of a pass, and
-    // full groups of 16 queries that share every pass: a batch gives the single queries'
+    // More rows than the search samples for its cut (one in 8) and than one block of a pass,
+    // and full groups of 16 queries that share every pass: a batch gives the single queries'
     // results bit for bit, and brute force's. k = 1 cuts close, so that the k-th distance
     // often lies beyond the cut and needs a second pass; the skewed families leave the seeds
     // in one family, so that the rest of the rows are refined in batches.

@@ -24,12 +24,12 @@
 //     rows that cannot be among the k nearest are skipped. For ESF-like data about 150 of
 //     300,000 rows need an exact distance for k = 10.
 //
-// No bound is stored: the bounds of a sample of 4,096 rows set a cut (a small rank of them), and
-// one pass over the sketches keeps only the rows whose bound falls under it (about
-// 4 * k * rows / 4096 of them: 3,000 of 300,000 for k = 10), enough for both steps unless the k-th
-// distance lies beyond the cut; then a second pass collects the rows under the k-th distance.
-// A batch shares each pass among up to 16 queries, so the sketches are read from memory once
-// for all of them.
+// No bound is stored: the bounds of a sample of the rows (4,096 of them, at most one in 8) set
+// a cut (a small rank of them), and one pass over the sketches keeps only the rows whose bound
+// falls under it (about 4 * k * rows / 4096 of them: 3,000 of 300,000 for k = 10), enough for
+// both steps unless the k-th distance lies beyond the cut; then a second pass collects the rows
+// under the k-th distance. A batch shares each pass among up to 16 queries, so the sketches are
+// read from memory once for all of them.
 //
 // Exact distances are accumulated in double in a fixed order (eight lanes, lane i % 8, combined
 // pairwise), which every kernel (portable, AVX2, AVX-512) reproduces bit for bit; the sketch
@@ -49,8 +49,8 @@
 // any dimension up to 4096 with the default group) + 8 bytes (its quantisation error): 2,632
 // bytes for ESF; + 4 bytes per row with groups. A search allocates little besides: the rows
 // under its cut (16 bytes each; about 10,000 at 1 million rows for k = 10), a copy of the
-// sample's sketches (4,096 rows: 300 KB for ESF), and 16 bytes per row when groups or families
-// leave the first rows short of k views or families.
+// sample's sketches (at most 4,096 rows: 300 KB for ESF), and 16 bytes per row when groups or
+// families leave the first rows short of k views or families.
 //
 // Thread safety: a built index is immutable; search() and search_batch() are const and may run
 // concurrently from any number of threads.
