@@ -61,6 +61,26 @@ void BM_Match(benchmark::State& state) {
 }
 BENCHMARK(BM_Match)->Unit(benchmark::kMillisecond);
 
+/// Matching as a frame's objects are matched: four described objects in one batch, one thread
+/// (time per object).
+void BM_MatchBatchOfFour(benchmark::State& state) {
+    constexpr std::size_t kObjects = 4;
+    std::size_t i = 0;
+    for (auto _ : state) {
+        std::vector<esf::QueryDescriptor> batch;
+        for (std::size_t k = 0; k < kObjects; ++k)
+            batch.push_back(g_descriptors[(i + k) % g_descriptors.size()]);
+        const std::vector<esf::CloudClassification> c = g_recognizer->classify_batch(batch);
+        benchmark::DoNotOptimize(c.data());
+        i = (i + kObjects) % g_descriptors.size();
+    }
+    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * kObjects));
+    state.counters["per_object_ms"] =
+        benchmark::Counter(static_cast<double>(state.iterations() * kObjects),
+                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_MatchBatchOfFour)->Unit(benchmark::kMillisecond);
+
 void BM_DescribeAndMatch(benchmark::State& state) {
     std::size_t i = 0;
     for (auto _ : state) {

@@ -21,6 +21,7 @@ constexpr double kMaxLaneWeight = 65535.0;    // integer lane weights: 16 bits
 constexpr std::size_t kSampleRows = 4096;     // rows sampled to cut the first candidates,
 constexpr std::size_t kSampleShare = 8;       // but at most one row in 8
 constexpr std::size_t kCutMargin = 4;         // the cut: the (4 * seeds)-th smallest sampled bound
+constexpr std::size_t kStoredShare = 4;       // a cut keeping a quarter of the rows: bounds stored
 constexpr std::size_t kMaxSketchBytes = std::size_t{1} << 27;  // 2^27 * 255 * 65535 < 2^52
 constexpr std::size_t kBuildBlock = 1024;                      // rows per build work item
 constexpr double kBoundShrink = 1.0 - 1e-9;          // relative slack taken off the sketch distance
@@ -368,6 +369,20 @@ void KnnIndex::collect_candidates(std::size_t count, const std::uint8_t* codes,
     }
 }
 
+void KnnIndex::all_bounds(std::size_t count, const std::uint8_t* codes, const double* errors,
+                          double* bounds) const {
+    const detail::KnnKernels kernels = detail::knn_kernels(kernels_);
+    const std::size_t block = std::max<std::size_t>(8, kBoundBlockBytes / stride_ / 8 * 8);
+    std::vector<std::uint32_t> row(block);
+    for (std::size_t r = 0; r < rows_; r += block) {
+        const std::size_t n = std::min(block, rows_ - r);
+        for (std::size_t q = 0; q < count; ++q)  // no limit: every row's bound, in row order
+            kernels.sketch(sketch_.data() + r * stride_, n, stride_, codes + q * stride_,
+                           lane_weight_.data(), sketch_unit_, row_error_.data() + r, errors[q],
+                           kInf, static_cast<std::uint32_t>(r), bounds + q * rows_ + r, row.data());
+    }
+}
+
 std::size_t KnnIndex::wanted(std::size_t k) const {
     return std::min(k, has_families() ? families_ : views_);
 }
@@ -394,6 +409,32 @@ void KnnIndex::search_group(std::span<const float> queries, std::size_t k,
     const std::size_t sample =
         std::min(rows_, std::max(seeds, std::min(kSampleRows, rows_ / kSampleShare)));
     const std::size_t rank = std::min(sample, kCutMargin * seeds);
+    std::vector<std::vector<Candidate>> below_cut(count);
+    if (kStoredShare * rank >= sample) {
+        // The cut would keep a large share of the rows (small indexes with families, whose
+        // seeds are many rows): every row's bound is stored instead, one pass, and the cut is
+        // the seeds-th smallest of kSampleRows of them; later passes read the stored bounds.
+        const std::size_t stored_sample = std::min(rows_, std::max(kSampleRows, seeds));
+        std::vector<double> bounds(count * rows_);
+        all_bounds(count, codes.data(), errors.data(), bounds.data());
+        std::vector<double> sampled(stored_sample);
+        for (std::size_t q = 0; q < count; ++q) {
+            const double* bound = bounds.data() + q * rows_;
+            for (std::size_t i = 0; i < stored_sample; ++i)
+                sampled[i] = bound[i * rows_ / stored_sample];
+            std::nth_element(sampled.begin(),
+                             sampled.begin() + static_cast<std::ptrdiff_t>(seeds - 1),
+                             sampled.end());
+            const double cut = sampled[seeds - 1];
+            for (std::size_t r = 0; r < rows_; ++r)
+                if (bound[r] <= cut)
+                    below_cut[q].emplace_back(bound[r], static_cast<std::uint32_t>(r));
+            results[q] =
+                search_bounded(queries.subspan(q * dimension_, dimension_), k,
+                               codes.data() + q * stride_, errors[q], cut, below_cut[q], bound);
+        }
+        return;
+    }
     std::vector<std::uint8_t> sample_codes;
     std::vector<double> sample_errors;
     const std::uint8_t* sample_sketch = sketch_.data();
@@ -422,13 +463,13 @@ void KnnIndex::search_group(std::span<const float> queries, std::size_t k,
         cuts[q] = sampled[rank - 1];
     }
 
-    std::vector<std::vector<Candidate>> below_cut(count);
     const std::vector<Candidate> from_start(count, Candidate{-kInf, 0});
     collect_candidates(count, codes.data(), errors.data(), cuts.data(), from_start.data(),
                        below_cut.data());
     for (std::size_t q = 0; q < count; ++q)
-        results[q] = search_bounded(queries.subspan(q * dimension_, dimension_), k,
-                                    codes.data() + q * stride_, errors[q], cuts[q], below_cut[q]);
+        results[q] =
+            search_bounded(queries.subspan(q * dimension_, dimension_), k,
+                           codes.data() + q * stride_, errors[q], cuts[q], below_cut[q], nullptr);
 }
 
 KnnResult KnnIndex::search_checked(std::span<const float> query, std::size_t k) const {
@@ -447,7 +488,7 @@ void KnnIndex::prefetch_row(std::size_t row) const {
 
 KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
                                    const std::uint8_t* codes, double error, double cut,
-                                   std::vector<Candidate>& below_cut) const {
+                                   std::vector<Candidate>& below_cut, const double* stored) const {
     const detail::KnnKernels distances = detail::knn_kernels(kernels_);
 
     // Optimal multi-step search (Seidl & Kriegel): lower bounds of all rows (see the header);
@@ -479,7 +520,14 @@ KnnResult KnnIndex::search_bounded(std::span<const float> query, std::size_t k,
     std::nth_element(below_cut.begin(), seeds_end - 1, below_cut.end());
     const Candidate last_seed = *(seeds_end - 1);
     const auto rows_below = [&](double limit, std::vector<Candidate>& out) {
-        collect_candidates(1, codes, &error, &limit, &last_seed, &out);
+        if (!stored) {
+            collect_candidates(1, codes, &error, &limit, &last_seed, &out);
+            return;
+        }
+        for (std::size_t r = 0; r < rows_; ++r)
+            if (const Candidate c{stored[r], static_cast<std::uint32_t>(r)};
+                c.first <= limit && last_seed < c)
+                out.push_back(c);
     };
     std::vector<Candidate> candidates(below_cut.begin(), seeds_end);
     refine(candidates);

@@ -189,10 +189,16 @@ class KnnIndex {
     void search_group(std::span<const float> queries, std::size_t k, KnnResult* results) const;
     /// Starts fetching row `row` into the cache.
     void prefetch_row(std::size_t row) const;
+    /// Lower bounds of every row for `count` queries, one pass: bounds[q * rows + r].
+    void all_bounds(std::size_t count, const std::uint8_t* codes, const double* errors,
+                    double* bounds) const;
     /// The search of one query (sketch `codes`, quantisation error `error`) given the rows
     /// whose bounds do not exceed `cut`, at least seed_count() of them (reordered as it goes).
+    /// `stored`: every row's bound for the query (all_bounds()), read instead of passing over
+    /// the sketches again; null: passes over them.
     KnnResult search_bounded(std::span<const float> query, std::size_t k, const std::uint8_t* codes,
-                             double error, double cut, std::vector<Candidate>& below_cut) const;
+                             double error, double cut, std::vector<Candidate>& below_cut,
+                             const double* stored) const;
 
     std::size_t dimension_ = 0;
     std::size_t rows_ = 0;

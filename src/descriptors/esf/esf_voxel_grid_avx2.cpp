@@ -25,7 +25,7 @@ ESF_TARGET_AVX2 void dilate_avx2(VoxelGrid::Words& words, int side) {
         const __m256i w = load(&words[static_cast<std::size_t>(r)]);
         store(&words[static_cast<std::size_t>(r)],
               _mm256_and_si256(_mm256_or_si256(w, _mm256_or_si256(_mm256_slli_epi64(w, 1),
-                                                                   _mm256_srli_epi64(w, 1))),
+                                                                  _mm256_srli_epi64(w, 1))),
                                x_mask));
     }
     // Along y, into `rows`: a slice's rows y - 1 and y + 1 where they lie in the first `side`.
@@ -41,10 +41,10 @@ ESF_TARGET_AVX2 void dilate_avx2(VoxelGrid::Words& words, int side) {
                 _mm256_cmpgt_epi64(below_side, _mm256_add_epi64(ys, _mm256_set1_epi64x(1)));
             const __m256i inside = _mm256_cmpgt_epi64(below_side, ys);
             // Masked loads never touch the words outside the slice that they leave out.
-            const __m256i prev = _mm256_maskload_epi64(
-                reinterpret_cast<const long long*>(slice + y - 1), has_prev);
-            const __m256i next = _mm256_maskload_epi64(
-                reinterpret_cast<const long long*>(slice + y + 1), has_next);
+            const __m256i prev =
+                _mm256_maskload_epi64(reinterpret_cast<const long long*>(slice + y - 1), has_prev);
+            const __m256i next =
+                _mm256_maskload_epi64(reinterpret_cast<const long long*>(slice + y + 1), has_next);
             const __m256i w = load(slice + y);
             store(&rows[static_cast<std::size_t>(z * kGridSide + y)],
                   _mm256_and_si256(inside, _mm256_or_si256(w, _mm256_or_si256(prev, next))));
