@@ -180,6 +180,23 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
         }
 }
 
+/// `count` point cells in corner `corner` (bit k: the high end of axis k) of the grid, set in
+/// `grid` (cleared first, dilated after).
+std::vector<std::uint32_t> corner_cells(std::uint32_t corner, int count,
+                                        esf::detail::VoxelGrid& grid, std::mt19937& rng) {
+    std::uniform_int_distribution<std::uint32_t> coord(0, 40);
+    grid.clear();
+    std::vector<std::uint32_t> points;
+    for (int i = 0; i < count; ++i) {
+        std::uint32_t c[3];
+        for (int k = 0; k < 3; ++k) c[k] = (corner >> k & 1) ? 63 - coord(rng) : coord(rng);
+        points.push_back(pack_cell(c[0], c[1], c[2]));
+        grid.set(points.back());
+    }
+    grid.dilate(64);
+    return points;
+}
+
 // One scratch serves many grids, as in an estimator: tables built for one grid must not leak
 // into the next (each grid fills a different corner of the cube).
 TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
@@ -187,17 +204,8 @@ TEST(LineTrace, SimdKernelsReuseTheirScratchAcrossGrids) {
     for (auto kernel : kSimdKernels) {
         esf::detail::TraceScratch scratch;
         for (std::uint32_t corner = 0; corner < 8; ++corner) {
-            std::uniform_int_distribution<std::uint32_t> coord(0, 40);
             esf::detail::VoxelGrid grid;
-            grid.clear();
-            std::vector<std::uint32_t> points;
-            for (int i = 0; i < 200; ++i) {
-                std::uint32_t c[3];
-                for (int k = 0; k < 3; ++k) c[k] = (corner >> k & 1) ? 63 - coord(rng) : coord(rng);
-                points.push_back(pack_cell(c[0], c[1], c[2]));
-                grid.set(points.back());
-            }
-            grid.dilate(64);
+            const std::vector<std::uint32_t> points = corner_cells(corner, 200, grid, rng);
             expect_kernel_matches_scalar(grid, lines_between(points, 5003, rng), kernel,
                                          esf::detail::LineEnds::kSetBeforeDilation, scratch,
                                          "corner " + std::to_string(corner));
@@ -212,17 +220,8 @@ TEST(LineTrace, SimdKernelsTakeTurnsOnOneScratch) {
     esf::detail::TraceScratch scratch;
     for (std::uint32_t turn = 0; turn < 12; ++turn) {
         const esf::Kernels kernel = kSimdKernels[turn % std::size(kSimdKernels)];
-        std::uniform_int_distribution<std::uint32_t> coord(0, 40);
         esf::detail::VoxelGrid grid;
-        grid.clear();
-        std::vector<std::uint32_t> points;
-        for (int i = 0; i < 150; ++i) {
-            std::uint32_t c[3];
-            for (int k = 0; k < 3; ++k) c[k] = (turn >> k & 1) ? 63 - coord(rng) : coord(rng);
-            points.push_back(pack_cell(c[0], c[1], c[2]));
-            grid.set(points.back());
-        }
-        grid.dilate(64);
+        const std::vector<std::uint32_t> points = corner_cells(turn % 8, 150, grid, rng);
         expect_kernel_matches_scalar(grid, lines_between(points, 3001, rng), kernel,
                                      esf::detail::LineEnds::kSetBeforeDilation, scratch,
                                      "turn " + std::to_string(turn));
