@@ -29,9 +29,8 @@ inline std::uint32_t visited_cells(std::uint32_t start, std::uint32_t end) {
 
 /// Scratch buffers of trace_lines(), kept between calls to avoid allocation.
 struct TraceScratch {
-    std::vector<std::uint32_t> order;  // lines by length (AVX2 kernel)
-    // AVX-512 kernel: lines packed, in input order, then in chunks of lines of one visited
-    // count (see bucket_lines_avx512)
+    // SIMD kernels: lines packed, in input order, then in chunks of lines of one visited count
+    // (see chunk_lines)
     std::vector<std::uint64_t> records, chunked;
     std::vector<std::uint8_t> chunk_visited;  // per chunk: the visited count of its lines
     std::vector<std::uint32_t> chunk_size;    // per chunk: how many lines it holds
