@@ -184,7 +184,32 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const TraceSc
         const std::uint64_t* const records = scratch.chunked.data() + chunk * kChunkLines;
         const int chunk_cells = scratch.chunk_visited[chunk];
         const int cells = chunk_cells - end_skip;
-        for (std::size_t group = 0; group < count; group += 16) {
+        std::size_t group = 0;
+        // Two full groups at a time: twice the independent work between look-ups.
+        for (; group + 32 <= count; group += 32) {
+            __m512i s, t, lines_a, lines_b;
+            unpack_lines(records + group, 0xffff, s, t, lines_a);
+            CubeLanes a = setup_cubes(s, t, chunk_cells, skip_known);
+            unpack_lines(records + group + 16, 0xffff, s, t, lines_b);
+            CubeLanes b = setup_cubes(s, t, chunk_cells, skip_known);
+            int i = first_cell;
+            CubeWalk walk_a = start_walk(a, i), walk_b = start_walk(b, i);
+            for (; i + 2 < cells; i += 3, advance_walk(a, walk_a), advance_walk(b, walk_b)) {
+                trace_triple<kAllCells>(a, cubes, walk_a);
+                trace_triple<kAllCells>(b, cubes, walk_b);
+            }
+            if (cells - i == 1) {
+                trace_triple<kFirstCell>(a, cubes, walk_a);
+                trace_triple<kFirstCell>(b, cubes, walk_b);
+            }
+            if (cells - i == 2) {
+                trace_triple<kFirstTwoCells>(a, cubes, walk_a);
+                trace_triple<kFirstTwoCells>(b, cubes, walk_b);
+            }
+            _mm512_mask_i32scatter_epi32(occupied, 0xffff, lines_a, a.occupied, 4);
+            _mm512_mask_i32scatter_epi32(occupied, 0xffff, lines_b, b.occupied, 4);
+        }
+        for (; group < count; group += 16) {
             const std::size_t size = std::min<std::size_t>(16, count - group);
             const auto live = static_cast<__mmask16>((1u << size) - 1u);
             __m512i s, t, lines;
