@@ -1,5 +1,6 @@
-// The AVX2 line tracer (see esf_trace.hpp): 8 lines at a time, sorted by length, three cells per
-// look-up in the table of 3x3x3 cubes (the closed form of esf_trace_avx512.cpp, in 8 lanes).
+// The AVX2 line tracer (see esf_trace.hpp): 8 lines of one length at a time (bucketed by
+// chunk_lines()), three cells per look-up in the table of 3x3x3 cubes (the closed form of
+// esf_trace_avx512.cpp, in 8 lanes).
 
 #include <immintrin.h>
 

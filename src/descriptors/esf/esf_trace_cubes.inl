@@ -185,7 +185,9 @@ ESF_CUBE_TARGET void trace_groups(const std::uint32_t* cube_table, const TraceSc
         const int chunk_cells = scratch.chunk_visited[chunk];
         const int cells = chunk_cells - end_skip;
         std::size_t group = 0;
-        // Two full groups at a time: twice the independent work between look-ups.
+        // Two full groups at a time: twice the independent work between look-ups. (Written out:
+        // the same walk over an array of groups, one template for both loops, kept the lanes in
+        // memory and took 7 % longer.)
         for (; group + 32 <= count; group += 32) {
             __m512i s, t, lines_a, lines_b;
             unpack_lines(records + group, 0xffff, s, t, lines_a);
