@@ -22,6 +22,7 @@ constexpr std::size_t kSampleRows = 4096;     // rows sampled to cut the first c
 constexpr std::size_t kSampleShare = 8;       // but at most one row in 8
 constexpr std::size_t kCutMargin = 4;         // the cut: the (4 * seeds)-th smallest sampled bound
 constexpr std::size_t kStoredShare = 4;       // a cut keeping a quarter of the rows: bounds stored
+constexpr std::size_t kStoredBytes = std::size_t{8} << 20;  // stored bounds of one turn of queries
 constexpr std::size_t kMaxSketchBytes = std::size_t{1} << 27;  // 2^27 * 255 * 65535 < 2^52
 constexpr std::size_t kBuildBlock = 1024;                      // rows per build work item
 constexpr double kBoundShrink = 1.0 - 1e-9;          // relative slack taken off the sketch distance
@@ -414,24 +415,30 @@ void KnnIndex::search_group(std::span<const float> queries, std::size_t k,
         // The cut would keep a large share of the rows (small indexes with families, whose
         // seeds are many rows): every row's bound is stored instead, one pass, and the cut is
         // the seeds-th smallest of kSampleRows of them; later passes read the stored bounds.
+        // Queries share a pass in turns of at most kStoredBytes of bounds (one query's at least).
         const std::size_t stored_sample = std::min(rows_, std::max(kSampleRows, seeds));
-        std::vector<double> bounds(count * rows_);
-        all_bounds(count, codes.data(), errors.data(), bounds.data());
+        const std::size_t turn =
+            std::clamp<std::size_t>(kStoredBytes / (rows_ * sizeof(double)), 1, count);
+        std::vector<double> bounds(turn * rows_);
         std::vector<double> sampled(stored_sample);
-        for (std::size_t q = 0; q < count; ++q) {
-            const double* bound = bounds.data() + q * rows_;
-            for (std::size_t i = 0; i < stored_sample; ++i)
-                sampled[i] = bound[i * rows_ / stored_sample];
-            std::nth_element(sampled.begin(),
-                             sampled.begin() + static_cast<std::ptrdiff_t>(seeds - 1),
-                             sampled.end());
-            const double cut = sampled[seeds - 1];
-            for (std::size_t r = 0; r < rows_; ++r)
-                if (bound[r] <= cut)
-                    below_cut[q].emplace_back(bound[r], static_cast<std::uint32_t>(r));
-            results[q] =
-                search_bounded(queries.subspan(q * dimension_, dimension_), k,
-                               codes.data() + q * stride_, errors[q], cut, below_cut[q], bound);
+        for (std::size_t first = 0; first < count; first += turn) {
+            const std::size_t n = std::min(turn, count - first);
+            all_bounds(n, codes.data() + first * stride_, errors.data() + first, bounds.data());
+            for (std::size_t q = first; q < first + n; ++q) {
+                const double* bound = bounds.data() + (q - first) * rows_;
+                for (std::size_t i = 0; i < stored_sample; ++i)
+                    sampled[i] = bound[i * rows_ / stored_sample];
+                std::nth_element(sampled.begin(),
+                                 sampled.begin() + static_cast<std::ptrdiff_t>(seeds - 1),
+                                 sampled.end());
+                const double cut = sampled[seeds - 1];
+                for (std::size_t r = 0; r < rows_; ++r)
+                    if (bound[r] <= cut)
+                        below_cut[q].emplace_back(bound[r], static_cast<std::uint32_t>(r));
+                results[q] =
+                    search_bounded(queries.subspan(q * dimension_, dimension_), k,
+                                   codes.data() + q * stride_, errors[q], cut, below_cut[q], bound);
+            }
         }
         return;
     }
