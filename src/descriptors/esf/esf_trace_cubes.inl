@@ -29,7 +29,9 @@ ESF_CUBE_TARGET inline __m512i minor2_of(const AxisRoles& r, const __m512i* v) {
 }
 
 /// `visited`: max(L, 1), the same for every line of the group.
-ESF_CUBE_TARGET CubeLanes setup_cubes(__m512i s, __m512i t, int visited, bool skip_known) {
+ESF_CUBE_TARGET inline __attribute__((always_inline)) CubeLanes setup_cubes(__m512i s, __m512i t,
+                                                                            int visited,
+                                                                            bool skip_known) {
     const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi32(1);
     const __m512i m63 = _mm512_set1_epi32(63);
     __m512i length[3], step[3], weight[3];  // weight: signed bit weight of the axis in a cube
