@@ -64,8 +64,10 @@ EsfCounts histogram_triangles(const TriangleSet& set, const std::uint32_t* occup
     const float d2_scale = static_cast<float>(kTopBin) / set.max_d2;
     const float d3_scale = static_cast<float>(kTopBin) / set.max_d3;
     const SimdLevel vector = pcl_division ? SimdLevel::kPortable : simd;
-    HistogramBlock block;
-    for (std::size_t first = 0; first < set.samples; first += kLanes) {
+    // Each block's bins are formed one block ahead of their increments: the increments read
+    // what the vector stores wrote a block earlier instead of waiting on them.
+    HistogramBlock blocks[2];
+    const auto form = [&](std::size_t first, HistogramBlock& block) {
         const std::size_t lanes = std::min<std::size_t>(kLanes, set.samples - first);
         if (vector == SimdLevel::kAvx512 && lanes == kLanes)
             histogram_block_avx512(set, occupied, visited, first, d2_scale, d3_scale, block);
@@ -74,6 +76,12 @@ EsfCounts histogram_triangles(const TriangleSet& set, const std::uint32_t* occup
         else
             histogram_block_scalar(set, occupied, visited, first, lanes, pcl_division, d2_scale,
                                    d3_scale, block);
+    };
+    if (set.samples > 0) form(0, blocks[0]);
+    for (std::size_t first = 0, turn = 0; first < set.samples; first += kLanes, turn ^= 1) {
+        const std::size_t lanes = std::min<std::size_t>(kLanes, set.samples - first);
+        if (first + kLanes < set.samples) form(first + kLanes, blocks[turn ^ 1]);
+        const HistogramBlock& block = blocks[turn];
         // Four lanes at a time, one per copy, their increments interleaved: a triangle's next
         // increment to its copy comes three others later, so a repeated bin (two lines of one
         // triangle in one bin) does not wait on the store before. Two lanes' positions per load
