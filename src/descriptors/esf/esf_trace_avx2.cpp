@@ -20,8 +20,8 @@ namespace esf::detail {
 
 namespace {
 
-/// Visited counts of all lines and their records (start | end << kEndShift | line <<
-/// kLineShift), 8 at a time, bucketed by visited count (chunk_lines()).
+/// Visited counts of all lines and their records (line_record()), 8 at a time, bucketed by
+/// visited count (chunk_lines()).
 ESF_TARGET_AVX2 std::size_t bucket_lines_avx2(std::span<const std::uint32_t> starts,
                                               std::span<const std::uint32_t> ends,
                                               std::span<std::uint8_t> visited,
@@ -34,7 +34,8 @@ ESF_TARGET_AVX2 std::size_t bucket_lines_avx2(std::span<const std::uint32_t> sta
     const std::size_t count = starts.size();
     std::vector<std::uint64_t>& records = scratch.records;
     records.resize(count);
-    const __m256i lane = _mm256_setr_epi64x(0, 1, 2, 3);
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256i line_part = _mm256_set1_epi32(static_cast<int>(kLinePartMask));
     std::size_t i = 0;
     for (; i + 8 <= count; i += 8) {
         const __m256i s = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(starts.data() + i));
@@ -50,19 +51,18 @@ ESF_TARGET_AVX2 std::size_t bucket_lines_avx2(std::span<const std::uint32_t> sta
             static_cast<std::uint32_t>(_mm256_extract_epi32(packed, 0)) |
             std::uint64_t{static_cast<std::uint32_t>(_mm256_extract_epi32(packed, 4))} << 32;
         std::memcpy(visited.data() + i, &bytes, 8);
-        for (int half = 0; half < 2; ++half) {
-            const __m128i s4 = half ? _mm256_extracti128_si256(s, 1) : _mm256_castsi256_si128(s);
-            const __m128i t4 = half ? _mm256_extracti128_si256(t, 1) : _mm256_castsi256_si128(t);
-            const __m256i line = _mm256_slli_epi64(
-                _mm256_add_epi64(lane, _mm256_set1_epi64x(static_cast<long long>(i + 4 * half))),
-                kLineShift);
-            _mm256_storeu_si256(
-                reinterpret_cast<__m256i*>(records.data() + i + 4 * half),
-                _mm256_or_si256(
-                    _mm256_or_si256(_mm256_cvtepu32_epi64(s4),
-                                    _mm256_slli_epi64(_mm256_cvtepu32_epi64(t4), kEndShift)),
-                    line));
-        }
+        const __m256i line = _mm256_add_epi32(lane, _mm256_set1_epi32(static_cast<int>(i)));
+        const __m256i low =
+            _mm256_or_si256(s, _mm256_slli_epi32(_mm256_and_si256(line, line_part), kCellBits));
+        const __m256i high = _mm256_or_si256(
+            t, _mm256_slli_epi32(_mm256_srli_epi32(line, kLinePartBits), kCellBits));
+        // Records 0-1 and 4-5, 2-3 and 6-7 (within 128-bit halves), then in order.
+        const __m256i pairs = _mm256_unpacklo_epi32(low, high);
+        const __m256i next_pairs = _mm256_unpackhi_epi32(low, high);
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(records.data() + i),
+                            _mm256_permute2x128_si256(pairs, next_pairs, 0x20));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(records.data() + i + 4),
+                            _mm256_permute2x128_si256(pairs, next_pairs, 0x31));
     }
     for (; i < count; ++i) {
         visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
@@ -307,17 +307,18 @@ ESF_TARGET_AVX2 inline void unpack_lines(const std::uint64_t* record, std::size_
         low = _mm256_maskload_epi64(at, live(0));
         high = _mm256_maskload_epi64(at + 4, live(4));
     }
-    // The low 32 bits of each 64-bit lane, low's then high's.
-    const __m256i even = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-    const auto narrow = [&](__m256i a, __m256i b) ESF_TARGET_AVX2 {
-        return _mm256_permute2x128_si256(_mm256_permutevar8x32_epi32(a, even),
-                                         _mm256_permutevar8x32_epi32(b, even), 0x20);
-    };
+    // The low words of the records, then their high words (line_record()).
+    const __m256i split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+    const __m256i first = _mm256_permutevar8x32_epi32(low, split);
+    const __m256i last = _mm256_permutevar8x32_epi32(high, split);
+    const __m256i low_words = _mm256_permute2x128_si256(first, last, 0x20);
+    const __m256i high_words = _mm256_permute2x128_si256(first, last, 0x31);
     const __m256i cell = _mm256_set1_epi32(static_cast<int>(kCellMask));
-    starts = _mm256_and_si256(narrow(low, high), cell);
-    ends = _mm256_and_si256(
-        narrow(_mm256_srli_epi64(low, kEndShift), _mm256_srli_epi64(high, kEndShift)), cell);
-    lines = narrow(_mm256_srli_epi64(low, kLineShift), _mm256_srli_epi64(high, kLineShift));
+    starts = _mm256_and_si256(low_words, cell);
+    ends = _mm256_and_si256(high_words, cell);
+    lines =
+        _mm256_or_si256(_mm256_srli_epi32(low_words, kCellBits),
+                        _mm256_slli_epi32(_mm256_srli_epi32(high_words, kCellBits), kLinePartBits));
 }
 
 }  // namespace

@@ -21,8 +21,8 @@ namespace esf::detail {
 
 namespace {
 
-/// Visited counts of all lines and their records (start | end << kEndShift | line <<
-/// kLineShift), 16 at a time, bucketed by visited count (chunk_lines()).
+/// Visited counts of all lines and their records (line_record()), 16 at a time, bucketed by
+/// visited count (chunk_lines()).
 ESF_TARGET_AVX512 std::size_t bucket_lines_avx512(std::span<const std::uint32_t> starts,
                                                   std::span<const std::uint32_t> ends,
                                                   std::span<std::uint8_t> visited,
@@ -33,7 +33,12 @@ ESF_TARGET_AVX512 std::size_t bucket_lines_avx512(std::span<const std::uint32_t>
     // (reading the vector stores back at once would stall on store forwarding).
     std::vector<std::uint64_t>& records = scratch.records;
     records.resize(count);
-    const __m512i lane = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    // Records 0-7 and 8-15: the low and high words of each line side by side.
+    const __m512i first_eight =
+        _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
+    const __m512i last_eight = _mm512_add_epi32(first_eight, _mm512_set1_epi32(8));
+    const __m512i line_part = _mm512_set1_epi32(static_cast<int>(kLinePartMask));
     std::size_t i = 0;
     for (; i + 16 <= count; i += 16) {
         const __m512i s = _mm512_loadu_si512(starts.data() + i);
@@ -46,19 +51,14 @@ ESF_TARGET_AVX512 std::size_t bucket_lines_avx512(std::span<const std::uint32_t>
         }
         _mm_storeu_si128(reinterpret_cast<__m128i*>(visited.data() + i),
                          _mm512_cvtepi32_epi8(longest));
-        for (int half = 0; half < 2; ++half) {
-            const __m256i s8 = half ? _mm512_extracti64x4_epi64(s, 1) : _mm512_castsi512_si256(s);
-            const __m256i t8 = half ? _mm512_extracti64x4_epi64(t, 1) : _mm512_castsi512_si256(t);
-            const __m512i line = _mm512_slli_epi64(
-                _mm512_add_epi64(lane, _mm512_set1_epi64(static_cast<long long>(i + 8 * half))),
-                kLineShift);
-            _mm512_storeu_si512(
-                records.data() + i + 8 * half,
-                _mm512_or_si512(
-                    _mm512_or_si512(_mm512_cvtepu32_epi64(s8),
-                                    _mm512_slli_epi64(_mm512_cvtepu32_epi64(t8), kEndShift)),
-                    line));
-        }
+        const __m512i line = _mm512_add_epi32(lane, _mm512_set1_epi32(static_cast<int>(i)));
+        const __m512i low =
+            _mm512_or_si512(s, _mm512_slli_epi32(_mm512_and_si512(line, line_part), kCellBits));
+        const __m512i high = _mm512_or_si512(
+            t, _mm512_slli_epi32(_mm512_srli_epi32(line, kLinePartBits), kCellBits));
+        _mm512_storeu_si512(records.data() + i, _mm512_permutex2var_epi32(low, first_eight, high));
+        _mm512_storeu_si512(records.data() + i + 8,
+                            _mm512_permutex2var_epi32(low, last_eight, high));
     }
     for (; i < count; ++i) {
         visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));

@@ -159,20 +159,21 @@ ESF_CUBE_TARGET inline void trace_triple(CubeLanes& lanes, const int* cubes, con
 #endif
 }
 
-/// Starts, ends and line numbers of the `live` records from `record`.
+/// Starts, ends and line numbers of the `live` records from `record` (line_record()).
 ESF_CUBE_TARGET inline void unpack_lines(const std::uint64_t* record, __mmask16 live,
                                          __m512i& starts, __m512i& ends, __m512i& lines) {
-    const __m512i low = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live), record);
-    const __m512i high = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live >> 8), record + 8);
-    const auto narrow = [](__m512i a, __m512i b) ESF_CUBE_TARGET {
-        return _mm512_inserti64x4(_mm512_castsi256_si512(_mm512_cvtepi64_epi32(a)),
-                                  _mm512_cvtepi64_epi32(b), 1);
-    };
-    const __m512i cell = _mm512_set1_epi64(static_cast<long long>(kCellMask));
-    starts = narrow(_mm512_and_si512(low, cell), _mm512_and_si512(high, cell));
-    ends = narrow(_mm512_and_si512(_mm512_srli_epi64(low, kEndShift), cell),
-                  _mm512_and_si512(_mm512_srli_epi64(high, kEndShift), cell));
-    lines = narrow(_mm512_srli_epi64(low, kLineShift), _mm512_srli_epi64(high, kLineShift));
+    const __m512i first = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live), record);
+    const __m512i last = _mm512_maskz_loadu_epi64(static_cast<__mmask8>(live >> 8), record + 8);
+    const __m512i even =
+        _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
+    const __m512i low = _mm512_permutex2var_epi32(first, even, last);
+    const __m512i high =
+        _mm512_permutex2var_epi32(first, _mm512_add_epi32(even, _mm512_set1_epi32(1)), last);
+    const __m512i cell = _mm512_set1_epi32(static_cast<int>(kCellMask));
+    starts = _mm512_and_si512(low, cell);
+    ends = _mm512_and_si512(high, cell);
+    lines = _mm512_or_si512(_mm512_srli_epi32(low, kCellBits),
+                            _mm512_slli_epi32(_mm512_srli_epi32(high, kCellBits), kLinePartBits));
 }
 
 /// Traces the chunked lines of bucket_lines_avx512() through the cube table, 16 lines per

@@ -25,14 +25,21 @@ enum class Tracer { kPortable, kAvx2, kAvx512, kAvx512Popcount };
 /// The widest tracer this CPU runs.
 Tracer widest_tracer();
 
-// A line record of the AVX-512 kernel: start | end << kEndShift | line << kLineShift.
-inline constexpr unsigned kEndShift = 3 * kGridBits, kLineShift = 2 * kEndShift;
-inline constexpr std::uint64_t kCellMask = (std::uint64_t{1} << kEndShift) - 1;
-inline constexpr std::size_t kMaxPackedLines = std::size_t{1} << (64 - kLineShift);
+// A line record of the SIMD kernels: two 32-bit words, each a cell and 14 bits of the line's
+// number, low = start | (line mod 2^14) << 18 and high = end | (line >> 14) << 18. A vector of
+// records splits into its starts and ends by one permutation each (no narrowing of 64-bit
+// lanes), and the line numbers follow by shifts.
+inline constexpr unsigned kCellBits = 3 * kGridBits;
+inline constexpr unsigned kLinePartBits = 32 - kCellBits;
+inline constexpr std::uint32_t kCellMask = (std::uint32_t{1} << kCellBits) - 1;
+inline constexpr std::uint32_t kLinePartMask = (std::uint32_t{1} << kLinePartBits) - 1;
+inline constexpr std::size_t kMaxPackedLines = std::size_t{1} << (2 * kLinePartBits);
 
-/// The record of line `line`: start | end << kEndShift | line << kLineShift.
+/// The record of line `line` (< kMaxPackedLines) from `start` to `end`.
 inline std::uint64_t line_record(std::uint32_t start, std::uint32_t end, std::size_t line) {
-    return start | std::uint64_t{end} << kEndShift | std::uint64_t{line} << kLineShift;
+    const std::uint32_t low = start | static_cast<std::uint32_t>(line & kLinePartMask) << kCellBits;
+    const std::uint32_t high = end | static_cast<std::uint32_t>(line >> kLinePartBits) << kCellBits;
+    return low | std::uint64_t{high} << 32;
 }
 
 /// Lines per chunk of chunk_lines(): a multiple of the 16 lanes of a group.
