@@ -62,40 +62,21 @@ inline std::uint32_t trace_one(const VoxelGrid& grid, std::uint32_t start, const
 
 }  // namespace
 
-std::size_t chunk_lines(std::span<const std::uint8_t> visited, TraceScratch& scratch) {
-    const std::size_t count = visited.size();
-    // Every chunk is full but each count's last: at most count / kChunkLines + kGridSide + 1.
-    const std::size_t most_chunks = count / kChunkLines + kGridSide + 1;
+LineChunker::LineChunker(std::size_t lines, TraceScratch& scratch) : scratch_(scratch) {
+    // Every chunk is full but each count's last: at most lines / kChunkLines + kGridSide + 1.
+    const std::size_t most_chunks = lines / kChunkLines + kGridSide + 1;
     scratch.chunked.resize(most_chunks * kChunkLines);
     scratch.chunk_visited.resize(most_chunks);
     scratch.chunk_size.resize(most_chunks);
-    std::uint64_t* const pool = scratch.chunked.data();
-    const std::uint64_t* const records = scratch.records.data();
-    // Per count: where its next record goes (0: no chunk yet). A count whose next place starts
-    // a chunk has filled its chunk (or has none) and opens the next free one.
-    std::array<std::uint32_t, kGridSide + 1> next{};
-    std::uint32_t chunks = 0;
-    const auto place = [&](std::uint32_t v, std::uint64_t record) {
-        std::uint32_t at = next[v];
-        if (at % kChunkLines == 0) [[unlikely]] {  // one record in kChunkLines
-            scratch.chunk_visited[chunks] = static_cast<std::uint8_t>(v);
-            at = chunks++ * kChunkLines;
-        }
-        pool[at] = record;
-        next[v] = at + 1;
-    };
-    // Eight lines a round, their counts by one load (the loop is bound by its instructions).
-    std::size_t i = 0;
-    for (; i + 8 <= count; i += 8) {
-        std::uint64_t eight;
-        std::memcpy(&eight, visited.data() + i, sizeof eight);
-        for (unsigned l = 0; l < 8; ++l) place((eight >> (8 * l)) & 255, records[i + l]);
-    }
-    for (; i < count; ++i) place(visited[i], records[i]);
-    for (std::uint32_t c = 0; c < chunks; ++c) scratch.chunk_size[c] = kChunkLines;
-    for (const std::uint32_t at : next)  // each count's last chunk, full or not
-        if (at != 0) scratch.chunk_size[(at - 1) / kChunkLines] = (at - 1) % kChunkLines + 1;
-    return chunks;
+    pool_ = scratch.chunked.data();
+    chunk_visited_ = scratch.chunk_visited.data();
+}
+
+std::size_t LineChunker::finish() {
+    for (std::uint32_t c = 0; c < chunks_; ++c) scratch_.chunk_size[c] = kChunkLines;
+    for (const std::uint32_t at : next_)  // each count's last chunk, full or not
+        if (at != 0) scratch_.chunk_size[(at - 1) / kChunkLines] = (at - 1) % kChunkLines + 1;
+    return chunks_;
 }
 
 Tracer widest_tracer() {

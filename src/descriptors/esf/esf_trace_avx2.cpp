@@ -1,5 +1,5 @@
 // The AVX2 line tracer (see esf_trace.hpp): 8 lines of one length at a time (bucketed by
-// chunk_lines()), three cells per look-up in the table of 3x3x3 cubes (the closed form of
+// LineChunker), three cells per look-up in the table of 3x3x3 cubes (the closed form of
 // esf_trace_avx512.cpp, in 8 lanes).
 
 #include <immintrin.h>
@@ -21,7 +21,7 @@ namespace esf::detail {
 namespace {
 
 /// Visited counts of all lines and their records (line_record()), 8 at a time, bucketed by
-/// visited count (chunk_lines()).
+/// visited count (LineChunker).
 ESF_TARGET_AVX2 std::size_t bucket_lines_avx2(std::span<const std::uint32_t> starts,
                                               std::span<const std::uint32_t> ends,
                                               std::span<std::uint8_t> visited,
@@ -32,43 +32,52 @@ ESF_TARGET_AVX2 std::size_t bucket_lines_avx2(std::span<const std::uint32_t> sta
         _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 4, 8, 12,
                          -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
     const std::size_t count = starts.size();
+    // A block of lines at a time: every line's count and record, 8 at a time, then the block's
+    // records into their chunks.
+    LineChunker chunker(count, scratch);
     std::vector<std::uint64_t>& records = scratch.records;
-    records.resize(count);
+    records.resize(kRecordBlockLines);
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     const __m256i line_part = _mm256_set1_epi32(static_cast<int>(kLinePartMask));
-    std::size_t i = 0;
-    for (; i + 8 <= count; i += 8) {
-        const __m256i s = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(starts.data() + i));
-        const __m256i t = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ends.data() + i));
-        __m256i longest = one;
-        for (int shift = 0; shift < 3 * kGridBits; shift += kGridBits) {
-            const __m256i d = _mm256_sub_epi32(_mm256_and_si256(_mm256_srli_epi32(t, shift), m63),
-                                               _mm256_and_si256(_mm256_srli_epi32(s, shift), m63));
-            longest = _mm256_max_epi32(longest, _mm256_abs_epi32(d));
+    for (std::size_t first = 0; first < count; first += kRecordBlockLines) {
+        const std::size_t last = std::min(count, first + kRecordBlockLines);
+        std::size_t i = first;
+        for (; i + 8 <= last; i += 8) {
+            const __m256i s =
+                _mm256_loadu_si256(reinterpret_cast<const __m256i*>(starts.data() + i));
+            const __m256i t = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ends.data() + i));
+            __m256i longest = one;
+            for (int shift = 0; shift < 3 * kGridBits; shift += kGridBits) {
+                const __m256i d =
+                    _mm256_sub_epi32(_mm256_and_si256(_mm256_srli_epi32(t, shift), m63),
+                                     _mm256_and_si256(_mm256_srli_epi32(s, shift), m63));
+                longest = _mm256_max_epi32(longest, _mm256_abs_epi32(d));
+            }
+            const __m256i packed = _mm256_shuffle_epi8(longest, low_bytes);
+            const std::uint64_t bytes =
+                static_cast<std::uint32_t>(_mm256_extract_epi32(packed, 0)) |
+                std::uint64_t{static_cast<std::uint32_t>(_mm256_extract_epi32(packed, 4))} << 32;
+            std::memcpy(visited.data() + i, &bytes, 8);
+            const __m256i line = _mm256_add_epi32(lane, _mm256_set1_epi32(static_cast<int>(i)));
+            const __m256i low =
+                _mm256_or_si256(s, _mm256_slli_epi32(_mm256_and_si256(line, line_part), kCellBits));
+            const __m256i high = _mm256_or_si256(
+                t, _mm256_slli_epi32(_mm256_srli_epi32(line, kLinePartBits), kCellBits));
+            // Records 0-1 and 4-5, 2-3 and 6-7 (within 128-bit halves), then in order.
+            const __m256i pairs = _mm256_unpacklo_epi32(low, high);
+            const __m256i next_pairs = _mm256_unpackhi_epi32(low, high);
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(records.data() + (i - first)),
+                                _mm256_permute2x128_si256(pairs, next_pairs, 0x20));
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(records.data() + (i - first) + 4),
+                                _mm256_permute2x128_si256(pairs, next_pairs, 0x31));
         }
-        const __m256i packed = _mm256_shuffle_epi8(longest, low_bytes);
-        const std::uint64_t bytes =
-            static_cast<std::uint32_t>(_mm256_extract_epi32(packed, 0)) |
-            std::uint64_t{static_cast<std::uint32_t>(_mm256_extract_epi32(packed, 4))} << 32;
-        std::memcpy(visited.data() + i, &bytes, 8);
-        const __m256i line = _mm256_add_epi32(lane, _mm256_set1_epi32(static_cast<int>(i)));
-        const __m256i low =
-            _mm256_or_si256(s, _mm256_slli_epi32(_mm256_and_si256(line, line_part), kCellBits));
-        const __m256i high = _mm256_or_si256(
-            t, _mm256_slli_epi32(_mm256_srli_epi32(line, kLinePartBits), kCellBits));
-        // Records 0-1 and 4-5, 2-3 and 6-7 (within 128-bit halves), then in order.
-        const __m256i pairs = _mm256_unpacklo_epi32(low, high);
-        const __m256i next_pairs = _mm256_unpackhi_epi32(low, high);
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(records.data() + i),
-                            _mm256_permute2x128_si256(pairs, next_pairs, 0x20));
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(records.data() + i + 4),
-                            _mm256_permute2x128_si256(pairs, next_pairs, 0x31));
+        for (; i < last; ++i) {
+            visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
+            records[i - first] = line_record(starts[i], ends[i], i);
+        }
+        chunker.add(visited.data() + first, records.data(), last - first);
     }
-    for (; i < count; ++i) {
-        visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
-        records[i] = line_record(starts[i], ends[i], i);
-    }
-    return chunk_lines(visited, scratch);
+    return chunker.finish();
 }
 
 // The row kernels of the cube table (esf_cube_table.inl).

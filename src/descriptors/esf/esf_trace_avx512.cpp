@@ -22,49 +22,57 @@ namespace esf::detail {
 namespace {
 
 /// Visited counts of all lines and their records (line_record()), 16 at a time, bucketed by
-/// visited count (chunk_lines()).
+/// visited count (LineChunker).
 ESF_TARGET_AVX512 std::size_t bucket_lines_avx512(std::span<const std::uint32_t> starts,
                                                   std::span<const std::uint32_t> ends,
                                                   std::span<std::uint8_t> visited,
                                                   TraceScratch& scratch) {
     const __m512i m63 = _mm512_set1_epi32(63), one = _mm512_set1_epi32(1);
     const std::size_t count = starts.size();
-    // First every line's count and record, 16 at a time; then the records into their chunks
-    // (reading the vector stores back at once would stall on store forwarding).
+    // A block of lines at a time: every line's count and record, 16 at a time, then the
+    // block's records into their chunks (reading the vector stores back at once would stall on
+    // store forwarding).
+    LineChunker chunker(count, scratch);
     std::vector<std::uint64_t>& records = scratch.records;
-    records.resize(count);
+    records.resize(kRecordBlockLines);
     const __m512i lane = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     // Records 0-7 and 8-15: the low and high words of each line side by side.
     const __m512i first_eight =
         _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
     const __m512i last_eight = _mm512_add_epi32(first_eight, _mm512_set1_epi32(8));
     const __m512i line_part = _mm512_set1_epi32(static_cast<int>(kLinePartMask));
-    std::size_t i = 0;
-    for (; i + 16 <= count; i += 16) {
-        const __m512i s = _mm512_loadu_si512(starts.data() + i);
-        const __m512i t = _mm512_loadu_si512(ends.data() + i);
-        __m512i longest = one;
-        for (unsigned shift = 0; shift < 18; shift += 6) {
-            const __m512i d = _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
-                                               _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
-            longest = _mm512_max_epi32(longest, _mm512_abs_epi32(d));
+    for (std::size_t first = 0; first < count; first += kRecordBlockLines) {
+        const std::size_t last = std::min(count, first + kRecordBlockLines);
+        std::size_t i = first;
+        for (; i + 16 <= last; i += 16) {
+            const __m512i s = _mm512_loadu_si512(starts.data() + i);
+            const __m512i t = _mm512_loadu_si512(ends.data() + i);
+            __m512i longest = one;
+            for (unsigned shift = 0; shift < 18; shift += 6) {
+                const __m512i d =
+                    _mm512_sub_epi32(_mm512_and_si512(_mm512_srli_epi32(t, shift), m63),
+                                     _mm512_and_si512(_mm512_srli_epi32(s, shift), m63));
+                longest = _mm512_max_epi32(longest, _mm512_abs_epi32(d));
+            }
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(visited.data() + i),
+                             _mm512_cvtepi32_epi8(longest));
+            const __m512i line = _mm512_add_epi32(lane, _mm512_set1_epi32(static_cast<int>(i)));
+            const __m512i low =
+                _mm512_or_si512(s, _mm512_slli_epi32(_mm512_and_si512(line, line_part), kCellBits));
+            const __m512i high = _mm512_or_si512(
+                t, _mm512_slli_epi32(_mm512_srli_epi32(line, kLinePartBits), kCellBits));
+            _mm512_storeu_si512(records.data() + (i - first),
+                                _mm512_permutex2var_epi32(low, first_eight, high));
+            _mm512_storeu_si512(records.data() + (i - first) + 8,
+                                _mm512_permutex2var_epi32(low, last_eight, high));
         }
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(visited.data() + i),
-                         _mm512_cvtepi32_epi8(longest));
-        const __m512i line = _mm512_add_epi32(lane, _mm512_set1_epi32(static_cast<int>(i)));
-        const __m512i low =
-            _mm512_or_si512(s, _mm512_slli_epi32(_mm512_and_si512(line, line_part), kCellBits));
-        const __m512i high = _mm512_or_si512(
-            t, _mm512_slli_epi32(_mm512_srli_epi32(line, kLinePartBits), kCellBits));
-        _mm512_storeu_si512(records.data() + i, _mm512_permutex2var_epi32(low, first_eight, high));
-        _mm512_storeu_si512(records.data() + i + 8,
-                            _mm512_permutex2var_epi32(low, last_eight, high));
+        for (; i < last; ++i) {
+            visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
+            records[i - first] = line_record(starts[i], ends[i], i);
+        }
+        chunker.add(visited.data() + first, records.data(), last - first);
     }
-    for (; i < count; ++i) {
-        visited[i] = static_cast<std::uint8_t>(visited_cells(starts[i], ends[i]));
-        records[i] = line_record(starts[i], ends[i], i);
-    }
-    return chunk_lines(visited, scratch);
+    return chunker.finish();
 }
 
 // The AVX-512 kernel looks up three cells per gathered element (gathers move about one element

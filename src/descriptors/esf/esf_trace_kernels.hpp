@@ -10,8 +10,10 @@
 // Gathers are never masked (slow on some CPUs): lanes past their end look up a cell inside the
 // table and their bits are dropped.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
 
 #include "descriptors/esf/esf_trace.hpp"
@@ -42,16 +44,57 @@ inline std::uint64_t line_record(std::uint32_t start, std::uint32_t end, std::si
     return low | std::uint64_t{high} << 32;
 }
 
-/// Lines per chunk of chunk_lines(): a multiple of the 16 lanes of a group.
+/// Lines per chunk of LineChunker: a multiple of the 16 lanes of a group.
 inline constexpr std::uint32_t kChunkLines = 256;
 
-/// Buckets the records of all lines (scratch.records, one per line in input order, with their
-/// visited counts) by visited count: each count fills chunks of kChunkLines records taken in
-/// turn from one pool (scratch.chunked), so every group of lanes in a chunk has lines of one
-/// length. Chunks are numbered in the order they are opened; each count's last chunk may be
-/// partly filled (scratch.chunk_size). Unlike a counting sort, no tally of the counts is needed
-/// first. Returns the number of chunks.
-std::size_t chunk_lines(std::span<const std::uint8_t> visited, TraceScratch& scratch);
+/// Lines the SIMD kernels form records for at a time before they bucket them: the records of a
+/// block stay in the L1 cache between the vector pass that forms them and the bucketing.
+inline constexpr std::size_t kRecordBlockLines = 1024;
+
+/// Buckets line records by visited count, a block of lines at a time: each count fills chunks
+/// of kChunkLines records taken in turn from one pool (scratch.chunked), so every group of lanes
+/// in a chunk has lines of one length. Chunks are numbered in the order they are opened; each
+/// count's last chunk may be partly filled (scratch.chunk_size). Unlike a counting sort, no
+/// tally of the counts is needed first.
+class LineChunker {
+  public:
+    /// Room for `lines` lines in all.
+    LineChunker(std::size_t lines, TraceScratch& scratch);
+
+    /// Adds `count` lines: their visited counts and records.
+    void add(const std::uint8_t* visited, const std::uint64_t* records, std::size_t count) {
+        std::uint64_t* const pool = pool_;
+        const auto place = [&](std::uint32_t v, std::uint64_t record) {
+            std::uint32_t at = next_[v];
+            if (at % kChunkLines == 0) [[unlikely]] {  // one record in kChunkLines
+                chunk_visited_[chunks_] = static_cast<std::uint8_t>(v);
+                at = chunks_++ * kChunkLines;
+            }
+            pool[at] = record;
+            next_[v] = at + 1;
+        };
+        // Eight lines a round, their counts by one load (the loop is bound by its instructions).
+        std::size_t i = 0;
+        for (; i + 8 <= count; i += 8) {
+            std::uint64_t eight;
+            std::memcpy(&eight, visited + i, sizeof eight);
+            for (unsigned l = 0; l < 8; ++l) place((eight >> (8 * l)) & 255, records[i + l]);
+        }
+        for (; i < count; ++i) place(visited[i], records[i]);
+    }
+
+    /// Sets every chunk's size; returns the number of chunks.
+    std::size_t finish();
+
+  private:
+    TraceScratch& scratch_;
+    std::uint64_t* pool_;
+    std::uint8_t* chunk_visited_;
+    // Per count: where its next record goes (0: no chunk yet). A count whose next place starts
+    // a chunk has filled its chunk (or has none) and opens the next free one.
+    std::array<std::uint32_t, kGridSide + 1> next_{};
+    std::uint32_t chunks_ = 0;
+};
 
 /// trace_lines() with AVX-512, for fewer than kMaxPackedLines lines. `skip_known`: the lines
 /// meet LineEnds::kSetBeforeDilation; `with_popcount`: the build that counts with VPOPCNTDQ
