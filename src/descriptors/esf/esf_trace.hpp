@@ -30,8 +30,7 @@ inline std::uint32_t visited_cells(std::uint32_t start, std::uint32_t end) {
 /// Scratch buffers of trace_lines(), kept between calls to avoid allocation.
 struct TraceScratch {
     // SIMD kernels: a block of lines packed, in input order, then all lines in chunks of lines
-    // of one visited count
-    // (see LineChunker)
+    // of one visited count (see LineChunker)
     std::vector<std::uint64_t> records, chunked;
     std::vector<std::uint8_t> chunk_visited;  // per chunk: the visited count of its lines
     std::vector<std::uint32_t> chunk_size;    // per chunk: how many lines it holds
