@@ -96,8 +96,8 @@ ESF_TARGET_AVX512 void angle_bins16(TriangleSet& set, std::size_t t) {
 
 /// The x, y, z and cell of points[index[l]] for the 16 lanes: each point by one 16-byte load,
 /// four points to a vector (lane q of vector j: point 4q + j), then a 4x4 transpose within the
-/// 128-bit lanes. Gathers move about one element per cycle; these loads and shuffles take about
-/// two thirds of the time of gathering the two 8-byte halves of each point.
+/// 128-bit lanes. Gathers move about one element per cycle; these loads and shuffles take less
+/// than half the time of gathering the two 8-byte halves of each point (bench/gather_bench.cpp).
 ESF_TARGET_AVX512 inline void load_points16(const PackedPoint* points, __m512i index, __m512& x,
                                             __m512& y, __m512& z, __m512i& cell) {
     alignas(64) std::uint32_t at[kLanes];
@@ -126,9 +126,9 @@ ESF_TARGET_AVX512 inline void load_points16(const PackedPoint* points, __m512i i
     cell = _mm512_castps_si512(high(zc01, zc23));
 }
 
-/// Blocks of indices drawn ahead of their gathers by sample_avx512 when the packed points do not
+/// Blocks of indices drawn ahead of their loads by sample_avx512 when the packed points do not
 /// fit a core's L2 cache (1 MiB on the AMD EPYC measured, more on the Intel Xeon), their points
-/// prefetched meanwhile: a gather from the 200,000 points of a scene otherwise waits on the L3
+/// prefetched meanwhile: a load from the 200,000 points of a scene otherwise waits on the L3
 /// cache (a scene's sampling 6 % faster; 4 blocks ahead beat 2 and 8). Smaller clouds gain
 /// nothing from it.
 constexpr int kPrefetchBlocks = 4;
@@ -148,7 +148,7 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
     SampleCount done;
     // Blocks go through three stages, each a block ahead of the next: indices and points drawn,
     // then the triangles' shape and acceptance, then the bookkeeping and stores. A block's long
-    // chain of dependent steps (gathers, square roots, Heron's product) then overlaps the
+    // chain of dependent steps (loads, square roots, Heron's product) then overlaps the
     // previous blocks' work instead of holding up the loop.
     struct Drawn {
         __m512i i1, i2, i3, c1, c2, c3;
