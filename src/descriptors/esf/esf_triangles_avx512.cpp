@@ -126,15 +126,6 @@ ESF_TARGET_AVX512 inline void load_points16(const PackedPoint* points, __m512i i
     cell = _mm512_castps_si512(high(zc01, zc23));
 }
 
-/// Blocks of indices drawn ahead of their loads by sample_avx512 when the packed points do not
-/// fit a core's L2 cache (1 MiB on the AMD EPYC measured, more on the Intel Xeon), their points
-/// prefetched meanwhile: a load from the 200,000 points of a scene otherwise waits on the L3
-/// cache (a scene's sampling 6 % faster; 4 blocks ahead beat 2 and 8). Smaller clouds gain
-/// nothing from it.
-constexpr int kPrefetchBlocks = 4;
-constexpr std::size_t kPrefetchFromBytes = std::size_t{1} << 20;
-
-template <bool kPrefetch>
 ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint32_t count,
                                             std::uint64_t seed, std::size_t max_attempts,
                                             float min_heron, TriangleSet& set) {
@@ -159,41 +150,11 @@ ESF_TARGET_AVX512 SampleCount sample_avx512(const PackedPoint* points, std::uint
         __m512 a, b, c, heron;
         __mmask16 keep;
     };
-    // Indices drawn ahead (kPrefetch): a ring of kPrefetchBlocks blocks of three index vectors.
-    struct Indices {
-        __m512i i1, i2, i3;
-    };
-    const auto draw_indices = [&]() ESF_TARGET_AVX512 {
-        Indices d;
+    const auto draw = [&]() ESF_TARGET_AVX512 {
+        Drawn d;
         d.i1 = bounded16(next16(s0, s1, s2, s3), n);
         d.i2 = bounded16(next16(s0, s1, s2, s3), n);
         d.i3 = bounded16(next16(s0, s1, s2, s3), n);
-        if constexpr (kPrefetch) {
-            alignas(64) std::uint32_t at[3][kLanes];
-            _mm512_store_si512(at[0], d.i1);
-            _mm512_store_si512(at[1], d.i2);
-            _mm512_store_si512(at[2], d.i3);
-            for (const auto& lanes : at)
-                for (const std::uint32_t i : lanes)
-                    _mm_prefetch(reinterpret_cast<const char*>(points + i), _MM_HINT_T0);
-        }
-        return d;
-    };
-    Indices ahead[kPrefetchBlocks];
-    if constexpr (kPrefetch)
-        for (auto& block : ahead) block = draw_indices();
-    int next_ahead = 0;
-    const auto draw = [&]() ESF_TARGET_AVX512 {
-        Drawn d;
-        if constexpr (kPrefetch) {
-            const Indices drawn_before = ahead[next_ahead];
-            ahead[next_ahead] = draw_indices();
-            next_ahead = (next_ahead + 1) % kPrefetchBlocks;
-            d.i1 = drawn_before.i1, d.i2 = drawn_before.i2, d.i3 = drawn_before.i3;
-        } else {
-            const Indices now = draw_indices();
-            d.i1 = now.i1, d.i2 = now.i2, d.i3 = now.i3;
-        }
         load_points16(points, d.i1, d.x1, d.y1, d.z1, d.c1);
         load_points16(points, d.i2, d.x2, d.y2, d.z2, d.c2);
         load_points16(points, d.i3, d.x3, d.y3, d.z3, d.c3);
@@ -278,9 +239,7 @@ ESF_TARGET_AVX512 SampleCount sample_triangles_avx512(const PackedPoint* points,
                                                       std::uint32_t count, std::uint64_t seed,
                                                       std::size_t max_attempts, float min_heron,
                                                       TriangleSet& set) {
-    return count * sizeof(PackedPoint) >= kPrefetchFromBytes
-               ? sample_avx512<true>(points, count, seed, max_attempts, min_heron, set)
-               : sample_avx512<false>(points, count, seed, max_attempts, min_heron, set);
+    return sample_avx512(points, count, seed, max_attempts, min_heron, set);
 }
 
 ESF_TARGET_AVX512 std::size_t angle_bins_avx512(TriangleSet& set, std::size_t count) {
