@@ -92,34 +92,6 @@ TEST(LineTrace, SimdKernelsMatchScalarOnRandomLines) {
         ASSERT_EQ(expected_visited[i], esf::detail::visited_cells(starts[i], ends[i]));
 }
 
-// Every count of lines from 1 to 40: the bucketing's rounds of eight lines and its tail, alone
-// and together.
-TEST(LineTrace, SimdKernelsMatchScalarOnFewLines) {
-    std::mt19937 rng(11);
-    std::uniform_int_distribution<std::uint32_t> coord(0, 63);
-    esf::detail::VoxelGrid grid;
-    grid.clear();
-    for (int i = 0; i < 2000; ++i) grid.set(pack_cell(coord(rng), coord(rng), coord(rng)));
-    grid.dilate(64);
-    for (std::size_t n = 1; n <= 40; ++n) {
-        std::vector<std::uint32_t> starts(n), ends(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            starts[i] = pack_cell(coord(rng), coord(rng), coord(rng));
-            // Every third line shares the first line's length class: repeated counts in a round.
-            ends[i] = i % 3 == 0 ? starts[i] ^ 5u : pack_cell(coord(rng), coord(rng), coord(rng));
-        }
-        std::vector<std::uint32_t> expected(n), actual(n);
-        std::vector<std::uint8_t> expected_visited(n), actual_visited(n);
-        esf::detail::trace_lines_scalar(grid, starts, ends, expected, expected_visited);
-        for (auto kernel : kSimdKernels) {
-            esf::detail::TraceScratch scratch;
-            esf::detail::trace_lines(grid, starts, ends, actual, actual_visited, scratch, kernel);
-            EXPECT_EQ(actual, expected) << n << " lines";
-            EXPECT_EQ(actual_visited, expected_visited) << n << " lines";
-        }
-    }
-}
-
 // Both dilation kernels against the definition, on random grids of every side ESF allows.
 TEST(VoxelGrid, DilationKernelsMatchTheDefinition) {
     std::mt19937 rng(3);
@@ -206,6 +178,30 @@ TEST(LineTrace, SimdKernelsMatchScalarBetweenPointCellsOfASparseGrid) {
             esf::detail::TraceScratch scratch;
             expect_kernel_matches_scalar(grid, lines, kernel, ends_hint, scratch, "");
         }
+}
+
+// Every count of lines from 1 to 40: the bucketing's rounds of eight lines and its tail, alone
+// and together, with repeated lengths in a round (few point cells).
+TEST(LineTrace, SimdKernelsMatchScalarOnFewLines) {
+    std::mt19937 rng(13);
+    std::uniform_int_distribution<std::uint32_t> coord(0, 63);
+    esf::detail::VoxelGrid grid;
+    grid.clear();
+    std::vector<std::uint32_t> points;
+    for (int i = 0; i < 6; ++i) {
+        points.push_back(pack_cell(coord(rng), coord(rng), coord(rng)));
+        grid.set(points.back());
+    }
+    grid.dilate(64);
+    for (std::size_t n = 1; n <= 40; ++n) {
+        const RandomLines lines = lines_between(points, n, rng);
+        for (auto kernel : kSimdKernels) {
+            esf::detail::TraceScratch scratch;
+            expect_kernel_matches_scalar(grid, lines, kernel,
+                                         esf::detail::LineEnds::kSetBeforeDilation, scratch,
+                                         std::to_string(n) + " lines");
+        }
+    }
 }
 
 /// `count` point cells in corner `corner` (bit k: the high end of axis k) of the grid, set in
