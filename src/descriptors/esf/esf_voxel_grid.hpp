@@ -3,6 +3,7 @@
 // resident): cell (x, y, z) is bit x | y << 6 | z << 12.
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 
 #include "core/simd.hpp"
@@ -30,6 +31,25 @@ struct alignas(64) VoxelGrid {
     /// narrower where the CPU lacks them (the same bits on every level).
     void dilate(int side, SimdLevel simd = SimdLevel::kAvx512);
 };
+
+/// The last step of VoxelGrid::dilate(), shared by every kernel: row (y, z) of `words` becomes
+/// the rows (y, z - 1), (y, z) and (y, z + 1) of `rows` together, the slices z < `side` only.
+/// Inline, so that each kernel's build vectorises it for its own instruction set.
+inline void dilate_along_z(const VoxelGrid::Words& rows, VoxelGrid::Words& words, int side) {
+    for (int z = 0; z < kGridSide; ++z) {
+        const bool has_prev = z > 0, has_next = z + 1 < side, inside = z < side;
+        const std::size_t slice = static_cast<std::size_t>(z * kGridSide);
+        for (std::size_t r = slice; r < slice + kGridSide; ++r) {
+            std::uint64_t word = 0;
+            if (inside) {
+                word = rows[r];
+                if (has_prev) word |= rows[r - kGridSide];
+                if (has_next) word |= rows[r + kGridSide];
+            }
+            words[r] = word;
+        }
+    }
+}
 
 /// VoxelGrid::dilate() with AVX-512 (the same bits); needs avx512_available().
 void dilate_avx512(VoxelGrid::Words& words, int side);

@@ -50,20 +50,7 @@ ESF_TARGET_AVX2 void dilate_avx2(VoxelGrid::Words& words, int side) {
                   _mm256_and_si256(inside, _mm256_or_si256(w, _mm256_or_si256(prev, next))));
         }
     }
-    // Along z, back into the grid.
-    for (int z = 0; z < kGridSide; ++z) {
-        const bool has_prev = z > 0, has_next = z + 1 < side, inside = z < side;
-        for (int y = 0; y < kGridSide; y += 4) {
-            const std::size_t r = static_cast<std::size_t>(z * kGridSide + y);
-            __m256i w = _mm256_setzero_si256();
-            if (inside) {
-                w = load(&rows[r]);
-                if (has_prev) w = _mm256_or_si256(w, load(&rows[r - kGridSide]));
-                if (has_next) w = _mm256_or_si256(w, load(&rows[r + kGridSide]));
-            }
-            store(&words[r], w);
-        }
-    }
+    dilate_along_z(rows, words, side);
 }
 
 }  // namespace esf::detail

@@ -46,20 +46,7 @@ ESF_TARGET_AVX512 void dilate_avx512(VoxelGrid::Words& words, int side) {
                 _mm512_maskz_mov_epi64(inside, _mm512_or_si512(w, _mm512_or_si512(prev, next))));
         }
     }
-    // Along z, back into the grid.
-    for (int z = 0; z < kGridSide; ++z) {
-        const bool has_prev = z > 0, has_next = z + 1 < side, inside = z < side;
-        for (int y = 0; y < kGridSide; y += 8) {
-            const std::size_t r = static_cast<std::size_t>(z * kGridSide + y);
-            __m512i w = _mm512_setzero_si512();
-            if (inside) {
-                w = _mm512_load_si512(&rows[r]);
-                if (has_prev) w = _mm512_or_si512(w, _mm512_load_si512(&rows[r - kGridSide]));
-                if (has_next) w = _mm512_or_si512(w, _mm512_load_si512(&rows[r + kGridSide]));
-            }
-            _mm512_store_si512(&words[r], w);
-        }
-    }
+    dilate_along_z(rows, words, side);
 }
 
 }  // namespace esf::detail
