@@ -32,10 +32,23 @@ struct alignas(64) VoxelGrid {
     void dilate(int side, SimdLevel simd = SimdLevel::kAvx512);
 };
 
-/// The last step of VoxelGrid::dilate(), shared by every kernel: row (y, z) of `words` becomes
-/// the rows (y, z - 1), (y, z) and (y, z + 1) of `rows` together, the slices z < `side` only.
-/// Inline, so that each kernel's build vectorises it for its own instruction set.
-inline void dilate_along_z(const VoxelGrid::Words& rows, VoxelGrid::Words& words, int side) {
+/// VoxelGrid::dilate() on `words`, the one copy of every kernel: the 3x3x3 box is separable,
+/// so the bits are dilated along x, then the rows along y, then the slices along z. Inline, so
+/// that each kernel's build vectorises it for its own instruction set.
+[[gnu::always_inline]] inline void dilate_words(VoxelGrid::Words& words, int side) {
+    const std::uint64_t x_mask = side >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << side) - 1;
+    for (auto& word : words) word = (word | (word << 1) | (word >> 1)) & x_mask;
+    // Along y, into `rows`: a slice's rows y - 1 and y + 1 where they lie in the first `side`.
+    alignas(64) VoxelGrid::Words rows;
+    for (int z = 0; z < kGridSide; ++z) {
+        const std::uint64_t* slice = &words[static_cast<std::size_t>(z * kGridSide)];
+        std::uint64_t* out = &rows[static_cast<std::size_t>(z * kGridSide)];
+        out[0] = side > 1 ? slice[0] | slice[1] : slice[0];
+        for (int y = 1; y + 1 < side; ++y) out[y] = slice[y - 1] | slice[y] | slice[y + 1];
+        if (side > 1) out[side - 1] = slice[side - 2] | slice[side - 1];
+        for (int y = side; y < kGridSide; ++y) out[y] = 0;
+    }
+    // Along z, back into the grid.
     for (int z = 0; z < kGridSide; ++z) {
         const bool has_prev = z > 0, has_next = z + 1 < side, inside = z < side;
         const std::size_t slice = static_cast<std::size_t>(z * kGridSide);
